@@ -1,0 +1,5 @@
+#include "commands.hpp"
+
+namespace ringtrack::cli {
+void register_demo(CLI::App&) {}
+}  // namespace ringtrack::cli

@@ -1,0 +1,29 @@
+// ringtrack command-line tool: turns every error into one line on stderr and a non-zero exit.
+
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "commands.hpp"
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/version.hpp"
+
+int main(int argc, char** argv) {
+  CLI::App app{"ringtrack: detect and track small objects in spinning-LiDAR scans"};
+  app.set_version_flag("--version", std::string("ringtrack ") + ringtrack::kVersion);
+  app.require_subcommand(1);
+  ringtrack::cli::register_dump_config(app);
+  ringtrack::cli::register_demo(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e);
+  } catch (const ringtrack::core::Error& e) {
+    std::cerr << "ringtrack: error: " << e.what() << "\n";
+    return 1;
+  } catch (const std::exception& e) {
+    std::cerr << "ringtrack: internal error: " << e.what() << "\n";
+    return 2;
+  }
+  return 0;
+}

@@ -1,0 +1,11 @@
+# Every dependency comes from Debian packages; scripts/bootstrap installs them.
+find_package(Eigen3 3.3 REQUIRED NO_MODULE)
+find_package(yaml-cpp REQUIRED)
+find_package(CLI11 REQUIRED)
+find_package(Threads REQUIRED)
+if(RINGTRACK_BUILD_TESTS)
+  find_package(GTest REQUIRED)
+endif()
+if(RINGTRACK_BUILD_BENCH)
+  find_package(benchmark REQUIRED)
+endif()

@@ -1,0 +1,23 @@
+# Project-wide warning and sanitizer flags, applied through the interface target
+# ringtrack_options so that third-party headers keep their own settings.
+add_library(ringtrack_options INTERFACE)
+target_compile_options(ringtrack_options INTERFACE
+  -Wall -Wextra -Wpedantic -Wshadow -Wconversion -Wno-sign-conversion
+  -Wnon-virtual-dtor -Wold-style-cast -Woverloaded-virtual -Wnull-dereference
+  $<$<BOOL:${RINGTRACK_WERROR}>:-Werror>)
+if(RINGTRACK_SANITIZE)
+  target_compile_options(ringtrack_options INTERFACE
+    -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all)
+  target_link_options(ringtrack_options INTERFACE -fsanitize=address,undefined)
+endif()
+
+# Adds a library target for one module: ringtrack_<name>, alias ringtrack::<name>.
+function(ringtrack_add_module name)
+  cmake_parse_arguments(ARG "" "" "SOURCES;DEPENDS" ${ARGN})
+  add_library(ringtrack_${name} STATIC ${ARG_SOURCES})
+  add_library(ringtrack::${name} ALIAS ringtrack_${name})
+  target_include_directories(ringtrack_${name} PUBLIC
+    $<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}/src>)
+  target_link_libraries(ringtrack_${name} PUBLIC ${ARG_DEPENDS} PRIVATE ringtrack_options)
+  set_target_properties(ringtrack_${name} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+endfunction()

@@ -1,0 +1,283 @@
+#include "ringtrack/core/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <utility>
+
+#include "ringtrack/core/error.hpp"
+
+namespace ringtrack::core {
+namespace {
+
+// One configurable value: how to print it, how to parse it (with range check) and its meaning.
+struct Field {
+  std::string section;
+  std::string name;
+  std::string description;
+  std::function<std::string()> get;
+  std::function<void(const std::string& text, const std::string& where)> set;
+};
+
+std::string format_double(double v) {
+  std::ostringstream os;
+  os.precision(std::numeric_limits<double>::max_digits10);
+  os << v;
+  // Shortest text that reads back to the same double, for readable dumps.
+  for (int p = 1; p <= std::numeric_limits<double>::max_digits10; ++p) {
+    std::ostringstream s;
+    s.precision(p);
+    s << v;
+    if (std::stod(s.str()) == v) return s.str();
+  }
+  return os.str();
+}
+
+double parse_double(const std::string& text, const std::string& where) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size() || !std::isfinite(v)) {
+    throw ConfigError(where + ": expected a finite number, got '" + text + "'");
+  }
+  return v;
+}
+
+// Collects the fields of every section; the single place that lists the configuration schema.
+class Schema {
+ public:
+  explicit Schema(Config& c) { build(c); }
+  [[nodiscard]] const std::vector<Field>& fields() const { return fields_; }
+  [[nodiscard]] const Field* find(const std::string& section, const std::string& name) const {
+    for (const auto& f : fields_) {
+      if (f.section == section && f.name == name) return &f;
+    }
+    return nullptr;
+  }
+  [[nodiscard]] bool has_section(const std::string& section) const {
+    for (const auto& f : fields_) {
+      if (f.section == section) return true;
+    }
+    return false;
+  }
+
+ private:
+  void number(const char* name, double& v, double lo, double hi, const std::string& doc) {
+    add(name, doc + " [" + format_double(lo) + ", " + format_double(hi) + "]",
+        [&v] { return format_double(v); },
+        [&v, lo, hi](const std::string& text, const std::string& where) {
+          const double x = parse_double(text, where);
+          if (x < lo || x > hi) {
+            throw ConfigError(where + ": " + text + " is out of range, expected " + format_double(lo) +
+                              " to " + format_double(hi));
+          }
+          v = x;
+        });
+  }
+  void integer(const char* name, int& v, int lo, int hi, const std::string& doc) {
+    add(name, doc + " [" + std::to_string(lo) + ", " + std::to_string(hi) + "]",
+        [&v] { return std::to_string(v); },
+        [&v, lo, hi](const std::string& text, const std::string& where) {
+          const double x = parse_double(text, where);
+          if (x != std::floor(x)) throw ConfigError(where + ": expected an integer, got '" + text + "'");
+          if (x < lo || x > hi) {
+            throw ConfigError(where + ": " + text + " is out of range, expected " + std::to_string(lo) +
+                              " to " + std::to_string(hi));
+          }
+          v = static_cast<int>(x);
+        });
+  }
+  template <class E>
+  void choice(const char* name, E& v, std::vector<std::pair<std::string, E>> names,
+              const std::string& doc) {
+    std::string allowed;
+    for (const auto& [n, e] : names) allowed += (allowed.empty() ? "" : " | ") + n;
+    add(name, doc + " {" + allowed + "}",
+        [&v, names] {
+          for (const auto& [n, e] : names) {
+            if (e == v) return n;
+          }
+          return std::string("?");
+        },
+        [&v, names, allowed](const std::string& text, const std::string& where) {
+          for (const auto& [n, e] : names) {
+            if (n == text) {
+              v = e;
+              return;
+            }
+          }
+          throw ConfigError(where + ": '" + text + "' is not one of " + allowed);
+        });
+  }
+  void add(const char* name, std::string doc, std::function<std::string()> get,
+           std::function<void(const std::string&, const std::string&)> set) {
+    fields_.push_back({section_, name, std::move(doc), std::move(get), std::move(set)});
+  }
+
+  void build(Config& c) {
+    auto& s = c.segmentation;
+    section_ = "segmentation";
+    number("min_width_m", s.min_width_m, 0.0, 10.0,
+           "narrowest object width (m); the noise median removes narrower groups");
+    number("max_width_m", s.max_width_m, 0.01, 20.0,
+           "widest object width (m); the background median removes narrower groups, wider ones are background");
+    integer("max_kernel_radius", s.max_kernel_radius, 1, 100000,
+            "cap on a median window's half width (columns); also capped at half a ring");
+    number("invalid_range_m", s.invalid_range_m, 1.0, 1e6,
+           "range given to invalid returns (m) so neighbours still see background; must exceed the sensor's max range");
+    number("delta_min_m", s.delta_min_m, -1e6, 1e6,
+           "certainty is 0 below this background-minus-noise median difference (m)");
+    number("delta_low_m", s.delta_low_m, -1e6, 1e6, "certainty rises linearly to 1 at this difference (m)");
+    number("delta_high_m", s.delta_high_m, -1e6, 1e6, "certainty stays 1 up to this difference (m)");
+    number("delta_max_m", s.delta_max_m, -1e6, 1e6, "certainty falls linearly to 0 at this difference (m)");
+    number("certainty_threshold", s.certainty_threshold, 1e-6, 1.0,
+           "a point is a segment point when its certainty is at least this (0 would make every point one)");
+
+    auto& d = c.detection;
+    section_ = "detection";
+    integer("neighbor_radius", d.neighbor_radius, 1, 50,
+            "region growing joins segment points within this Manhattan distance on the grid (cells)");
+    choice("join_rule", d.join_rule,
+           {{"range_difference", JoinRule::kRangeDifference}, {"euclidean", JoinRule::kEuclidean}},
+           "what must stay below join_distance_m for two neighbours to join: their range difference "
+           "(authors' code, robust to the sparse vertical spacing far away) or their 3-D distance (the paper)");
+    number("join_distance_m", d.join_distance_m, 0.0, 100.0, "theta of region growing (m)");
+    integer("min_cluster_points", d.min_cluster_points, 1, 100000, "smaller clusters are dropped");
+    number("min_height_m", d.min_height_m, 0.0, 100.0,
+           "object model: smallest vertical extent (m); not applied to clusters touching the top or bottom ring");
+    number("max_height_m", d.max_height_m, 0.0, 100.0, "object model: largest vertical extent (m)");
+    number("max_diagonal_m", d.max_diagonal_m, 0.0, 100.0, "object model: largest horizontal box diagonal (m)");
+    number("max_altitude_m", d.max_altitude_m, -1e6, 1e6,
+           "object model: largest world-frame z of a cluster's lowest point (m)");
+    number("relaxed_max_diagonal_m", d.relaxed_max_diagonal_m, 0.0, 100.0,
+           "relaxed model (near predicted tracks, no minimum height): largest horizontal diagonal (m)");
+    number("relaxed_radius_m", d.relaxed_radius_m, 0.0, 100.0,
+           "a cluster whose centroid lies this close to a predicted track position uses the relaxed model (m)");
+    number("min_position_stddev_m", d.min_position_stddev_m, 1e-6, 10.0,
+           "floor on each axis of a detection's position standard deviation (m)");
+  }
+
+  std::string section_;
+  std::vector<Field> fields_;
+};
+
+void apply_node(Config& config, const YAML::Node& root, const std::string& source) {
+  if (!root || root.IsNull()) return;
+  if (!root.IsMap()) throw ConfigError(source + ": expected a mapping of sections at the top level");
+  Schema schema(config);
+  for (const auto& section : root) {
+    const auto section_name = section.first.as<std::string>();
+    if (!schema.has_section(section_name)) {
+      throw ConfigError(source + ": unknown section '" + section_name + "'");
+    }
+    if (section.second.IsNull()) continue;
+    if (!section.second.IsMap()) {
+      throw ConfigError(source + ": section '" + section_name + "' must be a mapping of keys");
+    }
+    for (const auto& entry : section.second) {
+      const auto key = entry.first.as<std::string>();
+      const std::string where = source + ": key '" + section_name + "." + key + "'";
+      const Field* field = schema.find(section_name, key);
+      if (field == nullptr) throw ConfigError(source + ": unknown key '" + section_name + "." + key + "'");
+      if (!entry.second.IsScalar()) throw ConfigError(where + ": expected a single value");
+      field->set(entry.second.Scalar(), where);
+    }
+  }
+}
+
+}  // namespace
+
+std::vector<ConfigKeyInfo> describe_config(const Config& config) {
+  Config copy = config;
+  Schema schema(copy);
+  std::vector<ConfigKeyInfo> out;
+  for (const auto& f : schema.fields()) out.push_back({f.section + "." + f.name, f.get(), f.description});
+  return out;
+}
+
+void apply_config_yaml(Config& config, const std::string& yaml_text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  Config next = config;  // all-or-nothing: a bad key leaves the caller's config untouched
+  apply_node(next, root, source);
+  try {
+    validate_config(next);
+  } catch (const ConfigError& e) {
+    throw ConfigError(source + ": " + e.what());
+  }
+  config = next;
+}
+
+void apply_config_file(Config& config, const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open the configuration file");
+  std::stringstream text;
+  text << in.rdbuf();
+  apply_config_yaml(config, text.str(), path);
+}
+
+void apply_config_override(Config& config, const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  const auto dot = assignment.find('.');
+  if (eq == std::string::npos || dot == std::string::npos || dot > eq) {
+    throw ConfigError("--set '" + assignment + "': expected section.key=value");
+  }
+  const std::string section = assignment.substr(0, dot);
+  const std::string key = assignment.substr(dot + 1, eq - dot - 1);
+  const std::string value = assignment.substr(eq + 1);
+  Config next = config;
+  Schema schema(next);
+  const Field* field = schema.find(section, key);
+  if (field == nullptr) throw ConfigError("--set: unknown key '" + section + "." + key + "'");
+  field->set(value, "--set: key '" + section + "." + key + "'");
+  validate_config(next);
+  config = next;
+}
+
+void validate_config(const Config& c) {
+  const auto& s = c.segmentation;
+  if (!(s.min_width_m < s.max_width_m)) {
+    throw ConfigError("key 'segmentation.min_width_m' must be below 'segmentation.max_width_m'");
+  }
+  if (!(s.delta_min_m <= s.delta_low_m && s.delta_low_m <= s.delta_high_m &&
+        s.delta_high_m <= s.delta_max_m)) {
+    throw ConfigError(
+        "keys 'segmentation.delta_min_m <= delta_low_m <= delta_high_m <= delta_max_m' must be ordered");
+  }
+  const auto& d = c.detection;
+  if (!(d.min_height_m <= d.max_height_m)) {
+    throw ConfigError("key 'detection.min_height_m' must not exceed 'detection.max_height_m'");
+  }
+}
+
+std::string dump_config(const Config& config) {
+  std::ostringstream out;
+  out << "# ringtrack configuration: every key with its value; comments give meaning and range.\n";
+  std::string section;
+  for (const auto& info : describe_config(config)) {
+    const auto dot = info.key.find('.');
+    const auto this_section = info.key.substr(0, dot);
+    if (this_section != section) {
+      section = this_section;
+      out << section << ":\n";
+    }
+    out << "  # " << info.description << "\n";
+    out << "  " << info.key.substr(dot + 1) << ": " << info.value << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace ringtrack::core

@@ -1,0 +1,72 @@
+#pragma once
+/// The one configuration aggregate: a struct per module with documented defaults.
+
+#include <string>
+#include <vector>
+
+namespace ringtrack::core {
+
+/// Width-range segmentation (paper III.B). Widths define the objects to find: the noise median
+/// removes groups narrower than min_width_m, the background median removes groups narrower than
+/// max_width_m, and points where the two differ by delta (certainty >= threshold) are segments.
+struct SegmentationConfig {
+  double min_width_m{0.1};        // narrower groups (thin poles, spikes) are noise
+  double max_width_m{1.2};        // wider groups (walls, cars) are background
+  int max_kernel_radius{450};     // cap on a median window's half width, in columns
+  double invalid_range_m{250.0};  // range given to invalid returns; must exceed the sensor's max
+  double delta_min_m{0.1};        // certainty 0 below this background-minus-noise difference
+  double delta_low_m{0.3};        // certainty rises linearly to 1 here
+  double delta_high_m{300.0};     // certainty 1 up to here (objects against the sky included)
+  double delta_max_m{400.0};      // certainty falls linearly to 0 here
+  double certainty_threshold{0.5};  // a point is a segment point when certainty >= this
+};
+
+/// How region growing decides that two neighbouring segment points belong together.
+enum class JoinRule {
+  kEuclidean,        ///< 3-D distance below theta (the paper's rule)
+  kRangeDifference,  ///< range difference below theta (the authors' code)
+};
+
+/// Region growing and the object model (paper III.C).
+struct DetectionConfig {
+  int neighbor_radius{3};            // Manhattan radius of the grid neighbourhood, in cells
+  JoinRule join_rule{JoinRule::kRangeDifference};
+  double join_distance_m{0.5};       // theta: the largest distance (or range difference) joined
+  int min_cluster_points{3};         // smaller clusters are dropped
+  double min_height_m{0.8};          // object model: vertical extent range
+  double max_height_m{2.3};
+  double max_diagonal_m{1.3};        // largest horizontal box diagonal
+  double max_altitude_m{3.0};        // largest world z of the cluster's lowest point
+  double relaxed_max_diagonal_m{1.8};  // relaxed model near predicted tracks (no minimum height)
+  double relaxed_radius_m{0.8};      // a cluster this close to a prediction uses the relaxed model
+  double min_position_stddev_m{0.03};  // floor on each axis of a detection's covariance
+};
+
+/// Every setting of the pipeline.
+struct Config {
+  SegmentationConfig segmentation;
+  DetectionConfig detection;
+};
+
+/// Documentation of one key, as dump-config prints it.
+struct ConfigKeyInfo {
+  std::string key;          ///< "section.name"
+  std::string value;        ///< current value as YAML text
+  std::string description;  ///< meaning and allowed range
+};
+
+/// Lists every key with its value and meaning.
+std::vector<ConfigKeyInfo> describe_config(const Config& config);
+/// Applies the overrides in a YAML file; unknown keys and out-of-range values throw ConfigError
+/// naming the file and the key.
+void apply_config_file(Config& config, const std::string& path);
+/// Applies overrides from YAML text (source names it in errors).
+void apply_config_yaml(Config& config, const std::string& yaml_text, const std::string& source);
+/// Applies one "section.key=value" override.
+void apply_config_override(Config& config, const std::string& assignment);
+/// Checks relations between keys (e.g. min_width < max_width); throws ConfigError.
+void validate_config(const Config& config);
+/// The configuration as commented YAML that apply_config_yaml reads back unchanged.
+std::string dump_config(const Config& config);
+
+}  // namespace ringtrack::core

@@ -1,0 +1,229 @@
+#include "ringtrack/segmentation/segmenter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/segmentation/kernel.hpp"
+#include "ringtrack/segmentation/order_stat_window.hpp"
+#include "ringtrack/segmentation/radius_table.hpp"
+#include "ringtrack/segmentation/range_buckets.hpp"
+
+namespace ringtrack::segmentation {
+
+using detail::OrderStatWindow;
+using detail::RadiusTable;
+using detail::RangeBuckets;
+
+// Per-column-count state: radius tables and scratch buffers reused across scans.
+struct Segmenter::Tables {
+  int columns{0};
+  int pad{0};  // radius cap: the ring is extended by this many cells on both sides
+  RadiusTable noise_radius, background_radius;
+  std::vector<float> value;           // extended ring: filter ranges
+  std::vector<std::uint32_t> key;     // extended ring: their buckets
+  std::vector<std::uint16_t> r_noise, r_background;  // per point of the ring
+  std::vector<float> scratch;
+  OrderStatWindow noise_window{RangeBuckets::kCount};
+  OrderStatWindow background_window{RangeBuckets::kCount};
+};
+
+namespace {
+
+// How far a point's radius may drift from the reference radius before the reference snaps to it.
+// Must not exceed the reference radius (the bracket needs ranks rho - D and rho + D in a window
+// of 2 rho + 1). Larger means fewer snaps but looser brackets.
+int allowed_drift(int rho) { return std::min(rho, 2 + rho / 8); }
+
+// One median filter's reference window over the extended ring: its histogram holds the keys of
+// [left, right]; it is centred on the current point with radius rho.
+struct FilterState {
+  OrderStatWindow* window;
+  const std::uint32_t* key;
+  int rho{-1};
+  int left{0};
+  int right{-1};  // empty when right < left
+
+  // Changes the window to [new_left, new_right]; returns the number of keys added or removed.
+  std::size_t reshape(int new_left, int new_right) {
+    std::size_t updates = 0;
+    auto add = [&](int a, int b) {
+      if (a > b) return;
+      window->update<1>(key + a, key + b + 1);
+      updates += static_cast<std::size_t>(b - a + 1);
+    };
+    auto remove = [&](int a, int b) {
+      if (a > b) return;
+      window->update<-1>(key + a, key + b + 1);
+      updates += static_cast<std::size_t>(b - a + 1);
+    };
+    if (right < left || new_left > right || new_right < left) {
+      add(new_left, new_right);
+      remove(left, right);
+    } else {
+      add(new_left, left - 1);
+      add(right + 1, new_right);
+      remove(left, new_left - 1);
+      remove(new_right + 1, right);
+    }
+    left = new_left;
+    right = new_right;
+    return updates;
+  }
+
+  // Centres the window on extended index c; snaps rho to the point's radius r when r has drifted
+  // too far for the bracket.
+  std::size_t move_to(int c, int r) {
+    if (rho >= 0 && std::abs(r - rho) <= allowed_drift(rho)) {
+      // The common case: same reference radius, the window slides by one cell.
+      window->slide(key[left], key[right + 1]);
+      ++left;
+      ++right;
+      window->settle();
+      return 2;
+    }
+    rho = r;
+    const std::size_t updates = reshape(c - rho, c + rho);
+    const int d = allowed_drift(rho);
+    window->set_ranks(rho - d, rho + d);
+    window->settle();
+    return updates;
+  }
+
+  // Bucket of the median of the point's own window (radius r around c) and the keys below that
+  // bucket: the reference window is reshaped to it for the query and back, O(|r - rho|).
+  std::pair<std::uint32_t, int> median_bucket(int c, int r) {
+    if (r == rho) return window->bucket_of_rank(r);
+    const int old_left = left, old_right = right;
+    reshape(c - r, c + r);
+    const auto result = window->bucket_of_rank(r);
+    reshape(old_left, old_right);
+    return result;
+  }
+
+  void clear() {
+    reshape(0, -1);
+    rho = -1;
+  }
+};
+
+// The exact median of the window of radius r around c, knowing its bucket and the keys below it:
+// a selection among the few window values that share the bucket.
+float median_in_bucket(const std::vector<float>& value, const std::vector<std::uint32_t>& key, int c,
+                       int r, std::pair<std::uint32_t, int> bucket, std::vector<float>& scratch) {
+  scratch.clear();
+  for (int j = c - r; j <= c + r; ++j) {
+    if (key[static_cast<std::size_t>(j)] == bucket.first) scratch.push_back(value[static_cast<std::size_t>(j)]);
+  }
+  const auto nth = scratch.begin() + (r - bucket.second);
+  std::nth_element(scratch.begin(), nth, scratch.end());
+  return *nth;
+}
+
+// The decision from brackets of both medians: 1 segment, 0 background, -1 undecided. Float
+// subtraction is monotone, so the differences bracket the true delta; certainty is 1 on
+// [delta_low, delta_high] and 0 outside [delta_min, delta_max], and the threshold lies in (0, 1].
+int decide(float noise_lo, float noise_hi, float background_lo, float background_hi,
+           const core::SegmentationConfig& c) {
+  const float delta_hi = background_hi - noise_lo;
+  const float delta_lo = background_lo - noise_hi;
+  if (delta_hi < c.delta_min_m || delta_lo > c.delta_max_m) return 0;
+  if (delta_lo >= c.delta_low_m && delta_hi <= c.delta_high_m) return 1;
+  return -1;
+}
+
+}  // namespace
+
+Segmenter::Segmenter(const core::SegmentationConfig& config) : config_(config) {
+  core::validate_config(core::Config{config, {}});
+}
+Segmenter::~Segmenter() = default;
+Segmenter::Segmenter(Segmenter&&) noexcept = default;
+Segmenter& Segmenter::operator=(Segmenter&&) noexcept = default;
+
+void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_t>& labels) {
+  const int n = scan.columns();
+  if (n >= 65535) throw core::Error("segmentation: at most 65534 columns per ring are supported");
+  if (!tables_ || tables_->columns != n) {
+    auto t = std::make_unique<Tables>();
+    t->columns = n;
+    t->pad = effective_radius_cap(config_, n);
+    const double step = 2.0 * std::numbers::pi / n;
+    t->noise_radius = RadiusTable(KernelRadius{config_.min_width_m, step, false, t->pad});
+    t->background_radius = RadiusTable(KernelRadius{config_.max_width_m, step, true, t->pad});
+    t->value.resize(static_cast<std::size_t>(n + 2 * t->pad));
+    t->key.resize(t->value.size());
+    t->r_noise.resize(static_cast<std::size_t>(n));
+    t->r_background.resize(static_cast<std::size_t>(n));
+    tables_ = std::move(t);
+  }
+  Tables& t = *tables_;
+  labels.assign(scan.size(), kBackground);
+  stats_ = {};
+  const auto invalid = static_cast<float>(config_.invalid_range_m);
+  const auto& ranges = scan.ranges();
+  const auto& status = scan.statuses();
+  const int pad = t.pad;
+
+  for (int ring = 0; ring < scan.rings(); ++ring) {
+    const std::size_t base = scan.index(ring, 0);
+    // The ring extended by `pad` cells on both sides so windows never wrap: [tail | ring | head].
+    for (int col = 0; col < n; ++col) {
+      const auto i = base + static_cast<std::size_t>(col);
+      const float v = filter_range(ranges[i], status[i] == core::ReturnStatus::kValid, invalid);
+      t.value[static_cast<std::size_t>(col + pad)] = v;
+      t.key[static_cast<std::size_t>(col + pad)] = RangeBuckets::key(v);
+    }
+    std::copy_n(t.value.begin() + n, pad, t.value.begin());
+    std::copy_n(t.key.begin() + n, pad, t.key.begin());
+    std::copy_n(t.value.begin() + pad, pad, t.value.begin() + n + pad);
+    std::copy_n(t.key.begin() + pad, pad, t.key.begin() + n + pad);
+    for (int col = 0; col < n; ++col) {
+      const auto j = static_cast<std::size_t>(col + pad);
+      t.r_noise[static_cast<std::size_t>(col)] =
+          static_cast<std::uint16_t>(t.noise_radius.radius(t.value[j], t.key[j]));
+      t.r_background[static_cast<std::size_t>(col)] =
+          static_cast<std::uint16_t>(t.background_radius.radius(t.value[j], t.key[j]));
+    }
+    FilterState noise{&t.noise_window, t.key.data()};
+    FilterState background{&t.background_window, t.key.data()};
+    for (int col = 0; col < n; ++col) {
+      const int c = col + pad;
+      const int rn = t.r_noise[static_cast<std::size_t>(col)];
+      const int rb = t.r_background[static_cast<std::size_t>(col)];
+      stats_.window_updates += noise.move_to(c, rn);
+      stats_.window_updates += background.move_to(c, rb);
+      const auto i = base + static_cast<std::size_t>(col);
+      if (status[i] != core::ReturnStatus::kValid || !(t.value[static_cast<std::size_t>(c)] < invalid)) {
+        continue;  // invalid returns are background
+      }
+      ++stats_.points;
+      // 1) Brackets from the reference windows' tracked ranks: settles nearly every point.
+      int label = decide(RangeBuckets::lower(noise.window->lo_bucket()),
+                         RangeBuckets::upper(noise.window->hi_bucket()),
+                         RangeBuckets::lower(background.window->lo_bucket()),
+                         RangeBuckets::upper(background.window->hi_bucket()), config_);
+      if (label < 0) {
+        // 2) The buckets of the exact medians (0.1 % wide).
+        ++stats_.bucket_decisions;
+        const auto nb = noise.median_bucket(c, rn);
+        const auto bb = background.median_bucket(c, rb);
+        label = decide(RangeBuckets::lower(nb.first), RangeBuckets::upper(nb.first),
+                       RangeBuckets::lower(bb.first), RangeBuckets::upper(bb.first), config_);
+        if (label < 0) {
+          // 3) The exact medians, with the same arithmetic as the definition.
+          ++stats_.exact_decisions;
+          const float noise_median = median_in_bucket(t.value, t.key, c, rn, nb, t.scratch);
+          const float background_median = median_in_bucket(t.value, t.key, c, rb, bb, t.scratch);
+          label = is_segment(noise_median, background_median, config_) ? 1 : 0;
+        }
+      }
+      if (label == 1) labels[i] = kSegment;
+    }
+    noise.clear();
+    background.clear();
+  }
+}
+
+}  // namespace ringtrack::segmentation
