@@ -1,7 +1,7 @@
 #pragma once
 // A multiset of bucket keys (the values in a median window) with two tracked order statistics.
-// Adding or removing a key is O(1); after a batch of changes, settle() moves each tracked rank's
-// bucket pointer by as many non-empty buckets as the changes shifted it (found with a bitmap of
+// Adding or removing a key is O(1); reading a tracked rank's bucket moves its pointer by as many
+// non-empty buckets as the changes since the last read shifted it (found with a bitmap of
 // non-empty buckets), so a window sliding by one cell costs O(1) whatever its size.
 
 #include <bit>
@@ -46,21 +46,25 @@ class OrderStatWindow {
     lo_.rank = lo;
     hi_.rank = hi;
   }
-  /// Moves both pointers to the buckets holding their ranks.
-  void settle() {
-    settle(lo_);
-    settle(hi_);
-  }
   /// Bucket holding `rank` and the number of keys below that bucket, found by walking from the
   /// lower tracked pointer (cheap when rank is near it).
-  [[nodiscard]] std::pair<std::uint32_t, int> bucket_of_rank(int rank) const {
+  [[nodiscard]] std::pair<std::uint32_t, int> bucket_of_rank(int rank) {
     Pointer p = lo_;
     p.rank = rank;
     settle(p);
     return {p.bucket, p.below};
   }
-  [[nodiscard]] std::uint32_t lo_bucket() const { return lo_.bucket; }
-  [[nodiscard]] std::uint32_t hi_bucket() const { return hi_.bucket; }
+  /// Bucket holding the lower tracked rank. Pointers settle lazily, only when read: the window
+  /// jitters back and forth, so most of the movement cancels out before anyone looks.
+  [[nodiscard]] std::uint32_t lo_bucket() {
+    settle(lo_);
+    return lo_.bucket;
+  }
+  /// Bucket holding the upper tracked rank.
+  [[nodiscard]] std::uint32_t hi_bucket() {
+    settle(hi_);
+    return hi_.bucket;
+  }
   [[nodiscard]] int size() const { return size_; }
 
  private:
@@ -70,16 +74,17 @@ class OrderStatWindow {
     int rank{0};
   };
 
+  // The bitmap is maintained lazily: adding sets the bucket's bit, removing leaves it, and the
+  // searches clear bits they find stale. A set bit thus means "maybe non-empty", a clear bit
+  // "empty", which is all the searches need; it keeps the hot update to two stores.
   template <int kSign>
   void change(std::uint32_t key) {
-    const auto c = static_cast<std::uint16_t>(count_[key] + kSign);
-    count_[key] = c;
-    const std::uint64_t bit = std::uint64_t{1} << (key & 63);
-    std::uint64_t& word = occupied_[key >> 6];
-    word = c != 0 ? (word | bit) : (word & ~bit);
+    count_[key] = static_cast<std::uint16_t>(count_[key] + kSign);
+    if constexpr (kSign > 0) occupied_[key >> 6] |= std::uint64_t{1} << (key & 63);
   }
 
-  void settle(Pointer& p) const {
+  // Inlined: in the common case neither loop runs.
+  [[gnu::always_inline]] void settle(Pointer& p) {
     while (p.below > p.rank) {
       p.bucket = previous_nonempty(p.bucket);
       p.below -= count_[p.bucket];
@@ -90,19 +95,30 @@ class OrderStatWindow {
     }
   }
   // Callers guarantee that a non-empty bucket exists in the searched direction.
-  [[nodiscard]] std::uint32_t next_nonempty(std::uint32_t b) const {
+  [[gnu::noinline]] std::uint32_t next_nonempty(std::uint32_t b) {
     ++b;
     std::uint32_t w = b >> 6;
     std::uint64_t bits = occupied_[w] & (~std::uint64_t{0} << (b & 63));
-    while (bits == 0) bits = occupied_[++w];
-    return (w << 6) + static_cast<std::uint32_t>(std::countr_zero(bits));
+    for (;;) {
+      while (bits == 0) bits = occupied_[++w];
+      const std::uint32_t found = (w << 6) + static_cast<std::uint32_t>(std::countr_zero(bits));
+      if (count_[found] != 0) return found;
+      occupied_[w] &= ~(std::uint64_t{1} << (found & 63));  // stale: the bucket emptied
+      bits &= bits - 1;
+    }
   }
-  [[nodiscard]] std::uint32_t previous_nonempty(std::uint32_t b) const {
+  [[gnu::noinline]] std::uint32_t previous_nonempty(std::uint32_t b) {
     --b;
     std::uint32_t w = b >> 6;
     std::uint64_t bits = occupied_[w] & (~std::uint64_t{0} >> (63 - (b & 63)));
-    while (bits == 0) bits = occupied_[--w];
-    return (w << 6) + 63 - static_cast<std::uint32_t>(std::countl_zero(bits));
+    for (;;) {
+      while (bits == 0) bits = occupied_[--w];
+      const int top = 63 - std::countl_zero(bits);
+      const std::uint32_t found = (w << 6) + static_cast<std::uint32_t>(top);
+      if (count_[found] != 0) return found;
+      occupied_[w] &= ~(std::uint64_t{1} << top);
+      bits &= ~(std::uint64_t{1} << top);
+    }
   }
 
   std::vector<std::uint16_t> count_;

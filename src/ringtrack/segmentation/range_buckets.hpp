@@ -10,7 +10,7 @@ namespace ringtrack::segmentation::detail {
 
 class RangeBuckets {
  public:
-  static constexpr int kMantissaBits = 10;
+  static constexpr int kMantissaBits = 9;
   static constexpr int kShift = 23 - kMantissaBits;
   static constexpr float kLowest = 0.0625f;  // 2^-4: smaller values share bucket 0
   static constexpr float kHighest = 512.0f;  // 2^9: larger values share the last bucket

@@ -42,6 +42,7 @@ struct FilterState {
   OrderStatWindow* window;
   const std::uint32_t* key;
   int rho{-1};
+  int drift{0};  // allowed_drift(rho)
   int left{0};
   int right{-1};  // empty when right < left
 
@@ -75,20 +76,20 @@ struct FilterState {
   // Centres the window on extended index c; snaps rho to the point's radius r when r has drifted
   // too far for the bracket.
   std::size_t move_to(int c, int r) {
-    if (rho >= 0 && std::abs(r - rho) <= allowed_drift(rho)) {
-      // The common case: same reference radius, the window slides by one cell.
-      window->slide(key[left], key[right + 1]);
-      ++left;
-      ++right;
-      window->settle();
-      return 2;
+    if (rho >= 0 && std::abs(r - rho) <= drift) {
+      if (c - rho == left + 1) {
+        // The common case: same reference radius, the window slides by one cell.
+        window->slide(key[left], key[right + 1]);
+        ++left;
+        ++right;
+        return 2;
+      }
+      return reshape(c - rho, c + rho);  // skipped a run of invalid cells
     }
     rho = r;
-    const std::size_t updates = reshape(c - rho, c + rho);
-    const int d = allowed_drift(rho);
-    window->set_ranks(rho - d, rho + d);
-    window->settle();
-    return updates;
+    drift = allowed_drift(rho);
+    window->set_ranks(rho - drift, rho + drift);
+    return reshape(c - rho, c + rho);
   }
 
   // Bucket of the median of the point's own window (radius r around c) and the keys below that
@@ -136,7 +137,9 @@ int decide(float noise_lo, float noise_hi, float background_lo, float background
 }  // namespace
 
 Segmenter::Segmenter(const core::SegmentationConfig& config) : config_(config) {
-  core::validate_config(core::Config{config, {}});
+  core::Config full;
+  full.segmentation = config;
+  core::validate_config(full);
 }
 Segmenter::~Segmenter() = default;
 Segmenter::Segmenter(Segmenter&&) noexcept = default;
@@ -190,33 +193,42 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     FilterState background{&t.background_window, t.key.data()};
     for (int col = 0; col < n; ++col) {
       const int c = col + pad;
+      const auto i = base + static_cast<std::size_t>(col);
+      if (status[i] != core::ReturnStatus::kValid || !(t.value[static_cast<std::size_t>(c)] < invalid)) {
+        continue;  // invalid returns are background; windows jump over them to the next point
+      }
       const int rn = t.r_noise[static_cast<std::size_t>(col)];
       const int rb = t.r_background[static_cast<std::size_t>(col)];
       stats_.window_updates += noise.move_to(c, rn);
       stats_.window_updates += background.move_to(c, rb);
-      const auto i = base + static_cast<std::size_t>(col);
-      if (status[i] != core::ReturnStatus::kValid || !(t.value[static_cast<std::size_t>(c)] < invalid)) {
-        continue;  // invalid returns are background
-      }
       ++stats_.points;
-      // 1) Brackets from the reference windows' tracked ranks: settles nearly every point.
-      int label = decide(RangeBuckets::lower(noise.window->lo_bucket()),
-                         RangeBuckets::upper(noise.window->hi_bucket()),
-                         RangeBuckets::lower(background.window->lo_bucket()),
-                         RangeBuckets::upper(background.window->hi_bucket()), config_);
+      // 1) Brackets from the reference windows' tracked ranks: settles nearly every point. The
+      // background test needs only two of the four brackets, so it goes first.
+      const float noise_lo = RangeBuckets::lower(noise.window->lo_bucket());
+      const float background_hi = RangeBuckets::upper(background.window->hi_bucket());
+      if (background_hi - noise_lo < config_.delta_min_m) continue;
+      int label = decide(noise_lo, RangeBuckets::upper(noise.window->hi_bucket()),
+                         RangeBuckets::lower(background.window->lo_bucket()), background_hi, config_);
       if (label < 0) {
-        // 2) The buckets of the exact medians (0.1 % wide).
+        // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window
+        // is the narrow, cheap one, then if still needed the background median.
         ++stats_.bucket_decisions;
         const auto nb = noise.median_bucket(c, rn);
-        const auto bb = background.median_bucket(c, rb);
-        label = decide(RangeBuckets::lower(nb.first), RangeBuckets::upper(nb.first),
-                       RangeBuckets::lower(bb.first), RangeBuckets::upper(bb.first), config_);
+        const float noise_median_lo = RangeBuckets::lower(nb.first);
+        const float noise_median_hi = RangeBuckets::upper(nb.first);
+        label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(background.window->lo_bucket()),
+                       background_hi, config_);
         if (label < 0) {
-          // 3) The exact medians, with the same arithmetic as the definition.
-          ++stats_.exact_decisions;
-          const float noise_median = median_in_bucket(t.value, t.key, c, rn, nb, t.scratch);
-          const float background_median = median_in_bucket(t.value, t.key, c, rb, bb, t.scratch);
-          label = is_segment(noise_median, background_median, config_) ? 1 : 0;
+          const auto bb = background.median_bucket(c, rb);
+          label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(bb.first),
+                         RangeBuckets::upper(bb.first), config_);
+          if (label < 0) {
+            // 3) The exact medians, with the same arithmetic as the definition.
+            ++stats_.exact_decisions;
+            const float noise_median = median_in_bucket(t.value, t.key, c, rn, nb, t.scratch);
+            const float background_median = median_in_bucket(t.value, t.key, c, rb, bb, t.scratch);
+            label = is_segment(noise_median, background_median, config_) ? 1 : 0;
+          }
         }
       }
       if (label == 1) labels[i] = kSegment;
