@@ -14,6 +14,9 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   ringtrack::cli::register_dump_config(app);
   ringtrack::cli::register_demo(app);
+  ringtrack::cli::register_eval(app);
+  ringtrack::cli::register_simulate(app);
+  ringtrack::cli::register_convert(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -155,15 +155,72 @@ class Schema {
     number("min_height_m", d.min_height_m, 0.0, 100.0,
            "object model: smallest vertical extent (m); not applied to clusters touching the top or bottom ring");
     number("max_height_m", d.max_height_m, 0.0, 100.0, "object model: largest vertical extent (m)");
+    number("min_height_ring_gap_deg", d.min_height_ring_gap_deg, 0.0, 45.0,
+           "the minimum-height test adds mean range * tan(this) to a cluster's extent, as rings "
+           "this far apart see an object of height h as h minus up to two gaps (the sensor's "
+           "ring spacing in degrees, VLP-16: 2; 0 tests the bare extent)");
     number("max_diagonal_m", d.max_diagonal_m, 0.0, 100.0, "object model: largest horizontal box diagonal (m)");
     number("max_altitude_m", d.max_altitude_m, -1e6, 1e6,
            "object model: largest world-frame z of a cluster's lowest point (m)");
     number("relaxed_max_diagonal_m", d.relaxed_max_diagonal_m, 0.0, 100.0,
-           "relaxed model (near predicted tracks, no minimum height): largest horizontal diagonal (m)");
+           "relaxed model (near predicted tracks, no minimum height; max height and altitude still "
+           "apply): largest horizontal diagonal (m)");
     number("relaxed_radius_m", d.relaxed_radius_m, 0.0, 100.0,
-           "a cluster whose centroid lies this close to a predicted track position uses the relaxed model (m)");
+           "a cluster whose centroid lies this close (horizontally) to a predicted track position "
+           "may use the relaxed model (m)");
     number("min_position_stddev_m", d.min_position_stddev_m, 1e-6, 10.0,
            "floor on each axis of a detection's position standard deviation (m)");
+
+    auto& t = c.tracking;
+    section_ = "tracking";
+    choice("cost", t.cost,
+           {{"bhattacharyya", AssociationCost::kBhattacharyya},
+            {"mahalanobis", AssociationCost::kMahalanobis},
+            {"euclidean", AssociationCost::kEuclidean}},
+           "assignment cost between a predicted hypothesis and a detection: Bhattacharyya "
+           "distance of the two position distributions (the paper), Mahalanobis distance under "
+           "the innovation covariance, or Euclidean distance");
+    number("gate_bhattacharyya", t.gate_bhattacharyya, 1e-6, 1e6,
+           "cost = bhattacharyya: pairs above this distance are forbidden; an unpaired "
+           "hypothesis or detection costs this much");
+    number("gate_mahalanobis", t.gate_mahalanobis, 1e-6, 1e6,
+           "cost = mahalanobis: pairs above this distance (standard deviations) are forbidden");
+    number("gate_euclidean_m", t.gate_euclidean_m, 1e-6, 1e6,
+           "cost = euclidean: pairs farther apart than this (m) are forbidden");
+    number("process_noise", t.process_noise, 1e-9, 1e6,
+           "spectral density q of the white acceleration driving the constant-velocity model "
+           "(m^2/s^3)");
+    number("initial_velocity_stddev_mps", t.initial_velocity_stddev_mps, 1e-6, 1e3,
+           "standard deviation of a new hypothesis' velocity (m/s); its mean is zero");
+    number("measurement_covariance_scale", t.measurement_covariance_scale, 1e-6, 1e6,
+           "the Kalman measurement noise is a detection's covariance times this");
+    number("delete_eigenvalue_m2", t.delete_eigenvalue_m2, 1e-6, 1e6,
+           "a hypothesis is deleted once an eigenvalue of its position covariance exceeds this "
+           "(m^2); docs/tracking.md converts it to missed scans");
+    number("merge_distance_m", t.merge_distance_m, 0.0, 100.0,
+           "a younger hypothesis closer than this (horizontally, with overlapping heights) to an "
+           "older one is deleted (m)");
+    number("min_speed_kmh", t.min_speed_kmh, 0.0, 1e4,
+           "speeds up to this are reported as zero (km/h); the filter keeps its estimate");
+    number("max_speed_kmh", t.max_speed_kmh, 1e-6, 1e4,
+           "speeds are capped at this (km/h), in the filter state and in the report");
+    number("dynamic_min_distance_m", t.dynamic_min_distance_m, 0.0, 100.0,
+           "a hypothesis turns dynamic when its footprint no longer intersects its initial "
+           "footprint and its position has moved at least this far (m)");
+    integer("rest_scans_to_static", t.rest_scans_to_static, 0, 1000000,
+            "a dynamic hypothesis whose reported speed stays zero this many scans is static again "
+            "(ever_dynamic stays set); 0 = dynamic forever");
+
+    auto& m = c.mapping;
+    section_ = "mapping";
+    integer("log_delay_scans", m.log_delay_scans, 0, 100000,
+            "filtered scans wait this many scans in the log, where late dynamic decisions still "
+            "remove points, before they enter the static map");
+    number("voxel_size_m", m.voxel_size_m, 1e-3, 100.0,
+           "edge of a static-map voxel (m); each voxel keeps the mean position and intensity");
+    number("box_margin_m", m.box_margin_m, 0.0, 10.0,
+           "hypothesis boxes grow by this on every side before the points inside them are "
+           "removed (m)");
   }
 
   std::string section_;
@@ -260,6 +317,10 @@ void validate_config(const Config& c) {
   const auto& d = c.detection;
   if (!(d.min_height_m <= d.max_height_m)) {
     throw ConfigError("key 'detection.min_height_m' must not exceed 'detection.max_height_m'");
+  }
+  const auto& t = c.tracking;
+  if (!(t.min_speed_kmh < t.max_speed_kmh)) {
+    throw ConfigError("key 'tracking.min_speed_kmh' must be below 'tracking.max_speed_kmh'");
   }
 }
 

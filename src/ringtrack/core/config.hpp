@@ -35,6 +35,8 @@ struct DetectionConfig {
   int min_cluster_points{3};         // smaller clusters are dropped
   double min_height_m{0.8};          // object model: vertical extent range
   double max_height_m{2.3};
+  double min_height_ring_gap_deg{2.0};  // min-height test credits range*tan(this): sparse rings
+                                        // under-sample height (VLP-16 ring spacing; 0 = off)
   double max_diagonal_m{1.3};        // largest horizontal box diagonal
   double max_altitude_m{3.0};        // largest world z of the cluster's lowest point
   double relaxed_max_diagonal_m{1.8};  // relaxed model near predicted tracks (no minimum height)
@@ -42,10 +44,44 @@ struct DetectionConfig {
   double min_position_stddev_m{0.03};  // floor on each axis of a detection's covariance
 };
 
+/// Cost of pairing a detection with a hypothesis in the assignment (paper III.D).
+enum class AssociationCost {
+  kBhattacharyya,  ///< between the predicted position and the detection distributions (the paper)
+  kMahalanobis,    ///< of the centroid under the innovation covariance (predicted + detection)
+  kEuclidean,      ///< 3-D distance between the predicted position and the centroid
+};
+
+/// Multi-object tracking (paper III.D): constant-velocity Kalman filters in the world frame,
+/// Hungarian assignment with a gate, hypothesis lifecycle and static/dynamic classification.
+struct TrackingConfig {
+  AssociationCost cost{AssociationCost::kBhattacharyya};
+  double gate_bhattacharyya{4.0};  // pairs above this Bhattacharyya distance are forbidden
+  double gate_mahalanobis{4.0};    // ... above this Mahalanobis distance (sigmas)
+  double gate_euclidean_m{1.0};    // ... above this distance (m)
+  double process_noise{0.2};       // white-acceleration spectral density q (m^2/s^3)
+  double initial_velocity_stddev_mps{1.5};  // velocity prior of a new hypothesis
+  double measurement_covariance_scale{1.0};  // detection covariance times this is the noise R
+  double delete_eigenvalue_m2{1.0};  // delete when a position-covariance eigenvalue exceeds this
+  double merge_distance_m{0.3};    // younger hypotheses this close to older ones are deleted
+  double min_speed_kmh{1.0};       // reported speeds up to this are reported as zero
+  double max_speed_kmh{10.0};      // speeds are capped here (state and report)
+  double dynamic_min_distance_m{0.3};  // besides disjoint footprints, the centre must move this far
+  int rest_scans_to_static{30};    // dynamic hypotheses at rest this long turn static (0 = never)
+};
+
+/// Dynamic-object filter and static map (paper III.E).
+struct MappingConfig {
+  int log_delay_scans{50};     // filtered scans wait this many scans in the log before the map
+  double voxel_size_m{0.1};    // static-map voxel edge (one point per voxel)
+  double box_margin_m{0.1};    // boxes grow by this before points inside them are removed
+};
+
 /// Every setting of the pipeline.
 struct Config {
   SegmentationConfig segmentation;
   DetectionConfig detection;
+  TrackingConfig tracking;
+  MappingConfig mapping;
 };
 
 /// Documentation of one key, as dump-config prints it.

@@ -105,14 +105,16 @@ SensorModel SensorModel::vlp16(double scan_rate_hz) {
 
 SensorModel SensorModel::vlp32c(double scan_rate_hz) {
   // VLP-32C user manual: elevation and azimuth offset per laser id; lasers fire in pairs every
-  // 2.304 us, a sequence of 16 firings takes 55.296 us.
+  // 2.304 us, a sequence of 16 firings takes 55.296 us. The manual's offsets are added to the
+  // packet's clockwise azimuth; ringtrack azimuths turn counter-clockwise, hence the negation.
   const std::vector<double> elevation{-25,     -1,     -1.667, -15.639, -11.31, 0,      -0.667, -8.843,
                                       -7.254,  0.333,  -0.333, -6.148,  -5.333, 1.333,  0.667,  -4,
                                       -4.667,  1.667,  1,      -3.667,  -3.333, 3.333,  2.333,  -2.667,
                                       -3,      7,      4.667,  -2.333,  -2,     15,     10.333, -1.333};
-  const std::vector<double> azimuth{1.4, -4.2, 1.4, -1.4, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4,
-                                    -1.4, 4.2, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 4.2, -1.4,
-                                    1.4, -1.4, 1.4, -1.4, 1.4, -4.2, 4.2, -1.4, 1.4, -1.4};
+  std::vector<double> azimuth{1.4, -4.2, 1.4, -1.4, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4,
+                              -1.4, 4.2, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 4.2, -1.4,
+                              1.4, -1.4, 1.4, -1.4, 1.4, -4.2, 4.2, -1.4, 1.4, -1.4};
+  for (double& a : azimuth) a = -a;
   std::vector<double> firing(32);
   for (int i = 0; i < 32; ++i) firing[i] = 2.304 * (i / 2);
   SensorModel m = from_laser_tables("VLP-32C", elevation, {}, azimuth, firing);

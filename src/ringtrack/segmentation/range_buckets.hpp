@@ -1,6 +1,7 @@
 #pragma once
-// Monotone bucketing of non-negative floats by their bit pattern: about 1000 buckets per
-// doubling (0.1 % relative width), so a bucket brackets its values to [lower, upper).
+// Monotone bucketing of non-negative floats by their bit pattern: 512 buckets per doubling
+// (0.2 % relative width, 2 mm at 1 m), so a bucket brackets its values to [lower, upper). Finer
+// buckets give tighter brackets but make the rank pointers walk more; 512 measured best.
 
 #include <bit>
 #include <cstdint>

@@ -31,20 +31,31 @@ struct Segmenter::Tables {
 
 namespace {
 
-// How far a point's radius may drift from the reference radius before the reference snaps to it.
-// Must not exceed the reference radius (the bracket needs ranks rho - D and rho + D in a window
-// of 2 rho + 1). Larger means fewer snaps but looser brackets.
+// How far a point's radius and position may differ from the reference window's before the
+// reference moves (see FilterState). Must not exceed the reference radius (the bracket needs ranks
+// rho - D and rho + D in a window of 2 rho + 1). Larger means fewer bracket reads but looser
+// brackets.
 int allowed_drift(int rho) { return std::min(rho, 2 + rho / 8); }
 
-// One median filter's reference window over the extended ring: its histogram holds the keys of
-// [left, right]; it is centred on the current point with radius rho.
+// One median filter's reference window over the extended ring: a histogram of the keys of
+// [left, right] = [centre - rho, centre + rho] with tracked ranks rho - D and rho + D.
+//
+// The bracket: if a point j has radius r with |r - rho| <= D and |j - centre| <= D, its window
+// [j - r, j + r] differs from the reference by at most max(|r - rho|, |j - centre|) cells on the
+// side that matters for each bound, so its median lies in [os(rho - D), os(rho + D)] of the
+// reference window. One reference position thus serves 2 D + 1 consecutive points; moving it costs
+// two key updates per cell moved, the same as sliding cell by cell, but the tracked ranks are read
+// once per position instead of once per point.
 struct FilterState {
   OrderStatWindow* window;
   const std::uint32_t* key;
   int rho{-1};
-  int drift{0};  // allowed_drift(rho)
+  int drift{0};  // D = allowed_drift(rho)
+  int centre{0};
   int left{0};
   int right{-1};  // empty when right < left
+  float lo{0}, hi{0};  // bracket of the medians, valid when bracket_ready
+  bool bracket_ready{false};
 
   // Changes the window to [new_left, new_right]; returns the number of keys added or removed.
   std::size_t reshape(int new_left, int new_right) {
@@ -73,31 +84,40 @@ struct FilterState {
     return updates;
   }
 
-  // Centres the window on extended index c; snaps rho to the point's radius r when r has drifted
-  // too far for the bracket.
-  std::size_t move_to(int c, int r) {
-    if (rho >= 0 && std::abs(r - rho) <= drift) {
-      if (c - rho == left + 1) {
-        // The common case: same reference radius, the window slides by one cell.
-        window->slide(key[left], key[right + 1]);
-        ++left;
-        ++right;
-        return 2;
-      }
-      return reshape(c - rho, c + rho);  // skipped a run of invalid cells
+  // Makes the reference serve point j (extended index) with radius r; `last` is the extended
+  // index of the ring's last cell. Returns the number of key updates.
+  std::size_t cover(int j, int r, int last) {
+    if (rho >= 0 && std::abs(r - rho) <= drift && std::abs(j - centre) <= drift) return 0;
+    if (rho < 0 || std::abs(r - rho) > drift) {
+      rho = r;
+      drift = allowed_drift(rho);
+      window->set_ranks(rho - drift, rho + drift);
     }
-    rho = r;
-    drift = allowed_drift(rho);
-    window->set_ranks(rho - drift, rho + drift);
-    return reshape(c - rho, c + rho);
+    centre = std::min(j + drift, last);  // ahead of j, so it also serves the next 2 D points
+    bracket_ready = false;
+    return reshape(centre - rho, centre + rho);
   }
 
-  // Bucket of the median of the point's own window (radius r around c) and the keys below that
-  // bucket: the reference window is reshaped to it for the query and back, O(|r - rho|).
-  std::pair<std::uint32_t, int> median_bucket(int c, int r) {
-    if (r == rho) return window->bucket_of_rank(r);
+  void read_bracket() {
+    lo = RangeBuckets::lower(window->lo_bucket());
+    hi = RangeBuckets::upper(window->hi_bucket());
+    bracket_ready = true;
+  }
+  float lower() {
+    if (!bracket_ready) read_bracket();
+    return lo;
+  }
+  float upper() {
+    if (!bracket_ready) read_bracket();
+    return hi;
+  }
+
+  // Bucket of the median of point j's own window (radius r) and the keys below that bucket: the
+  // reference is reshaped to that window for the query and back, O(max(|r - rho|, |j - centre|)).
+  std::pair<std::uint32_t, int> median_bucket(int j, int r) {
+    if (r == rho && j == centre) return window->bucket_of_rank(r);
     const int old_left = left, old_right = right;
-    reshape(c - r, c + r);
+    reshape(j - r, j + r);
     const auto result = window->bucket_of_rank(r);
     reshape(old_left, old_right);
     return result;
@@ -106,6 +126,7 @@ struct FilterState {
   void clear() {
     reshape(0, -1);
     rho = -1;
+    bracket_ready = false;
   }
 };
 
@@ -191,33 +212,32 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     }
     FilterState noise{&t.noise_window, t.key.data()};
     FilterState background{&t.background_window, t.key.data()};
+    const int last = pad + n - 1;
     for (int col = 0; col < n; ++col) {
       const int c = col + pad;
       const auto i = base + static_cast<std::size_t>(col);
       if (status[i] != core::ReturnStatus::kValid || !(t.value[static_cast<std::size_t>(c)] < invalid)) {
-        continue;  // invalid returns are background; windows jump over them to the next point
+        continue;  // invalid returns are background
       }
       const int rn = t.r_noise[static_cast<std::size_t>(col)];
       const int rb = t.r_background[static_cast<std::size_t>(col)];
-      stats_.window_updates += noise.move_to(c, rn);
-      stats_.window_updates += background.move_to(c, rb);
+      stats_.window_updates += noise.cover(c, rn, last);
+      stats_.window_updates += background.cover(c, rb, last);
       ++stats_.points;
-      // 1) Brackets from the reference windows' tracked ranks: settles nearly every point. The
-      // background test needs only two of the four brackets, so it goes first.
-      const float noise_lo = RangeBuckets::lower(noise.window->lo_bucket());
-      const float background_hi = RangeBuckets::upper(background.window->hi_bucket());
+      // 1) Brackets from the reference windows: settle nearly every point. The background test
+      // needs only two of the four bounds, so it goes first.
+      const float noise_lo = noise.lower();
+      const float background_hi = background.upper();
       if (background_hi - noise_lo < config_.delta_min_m) continue;
-      int label = decide(noise_lo, RangeBuckets::upper(noise.window->hi_bucket()),
-                         RangeBuckets::lower(background.window->lo_bucket()), background_hi, config_);
+      int label = decide(noise_lo, noise.upper(), background.lower(), background_hi, config_);
       if (label < 0) {
-        // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window
+        // 2) The buckets (0.2 % wide) of the exact medians: first the noise median, whose window
         // is the narrow, cheap one, then if still needed the background median.
         ++stats_.bucket_decisions;
         const auto nb = noise.median_bucket(c, rn);
         const float noise_median_lo = RangeBuckets::lower(nb.first);
         const float noise_median_hi = RangeBuckets::upper(nb.first);
-        label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(background.window->lo_bucket()),
-                       background_hi, config_);
+        label = decide(noise_median_lo, noise_median_hi, background.lower(), background_hi, config_);
         if (label < 0) {
           const auto bb = background.median_bucket(c, rb);
           label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(bb.first),

@@ -43,7 +43,7 @@ SimpleScene SimpleScene::demo() {
   s.range_noise_m = 0.02;
   s.cylinders = {person(4.0, 1.0, -1.5, 1),   person(-3.0, 5.0, -1.5, 2), person(6.0, -6.0, -1.5, 3),
                  person(-8.0, -2.0, -1.5, 4), person(5.0, 1.8, -1.5, 5),
-                 Cylinder{2.0, -3.0, 0.05, -1.5, 2.0, 0}};  // a thin pole, too narrow to segment
+                 Cylinder{2.0, -3.0, 0.03, -1.5, 2.0, 0}};  // a 6 cm pole: narrower than min_width_m
   return s;
 }
 

@@ -1,0 +1,340 @@
+// `ringtrack eval`: CLEAR MOT, MT/PT/ML and ID metrics of tracks against ground truth, per
+// sequence and summed over sequences (docs/evaluation.md).
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/eval/tracking_eval.hpp"
+#include "ringtrack/io/mot_tables.hpp"
+
+namespace ringtrack::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct EvalOptions {
+  std::vector<std::string> gt;
+  std::vector<std::string> tracks;
+  std::string format = "ringtrack";
+  double threshold_m = 0.5;
+  double min_iou = 0.5;
+  bool all_hypotheses = false;
+  std::string target_class = "person";
+  std::int64_t min_points = 1;
+  bool ignore_stamps = false;
+  bool json = false;
+};
+
+struct SequenceResult {
+  std::string name;
+  std::string gt_path;
+  std::string tracks_path;
+  eval::TrackingEvalResult result;  // for MOTChallenge only `summary` is filled
+};
+
+// A sequence folder stands for its ground-truth file inside.
+fs::path resolve_gt(const std::string& arg, bool motchallenge, std::string& name) {
+  const fs::path p(arg);
+  // Names come from the absolute path so that "." or "objects.csv" still name the folder.
+  std::error_code ec;
+  fs::path full = fs::weakly_canonical(fs::absolute(p), ec);
+  if (ec) full = p;
+  if (fs::is_directory(p)) {
+    name =
+        full.filename().empty() ? full.parent_path().filename().string() : full.filename().string();
+    const fs::path file = motchallenge ? p / "gt" / "gt.txt" : p / "objects.csv";
+    if (!fs::is_regular_file(file)) {
+      throw core::InputError(
+          arg + ": sequence folder without " +
+          (motchallenge ? std::string("gt/gt.txt") : std::string("objects.csv")));
+    }
+    return file;
+  }
+  const fs::path parent = full.parent_path();
+  name = parent.filename().empty() ? full.stem().string() : parent.filename().string();
+  if (motchallenge && name == "gt" && !parent.parent_path().filename().empty()) {
+    name = parent.parent_path().filename().string();  // SEQ/gt/gt.txt
+  }
+  return p;
+}
+
+eval::TrackingEvalResult evaluate_ringtrack(const fs::path& gt_path, const fs::path& tracks_path,
+                                            const EvalOptions& o) {
+  const std::vector<io::ObjectRow> objects = io::read_objects_csv(gt_path);
+  const std::vector<io::TrackRow> tracks = io::read_tracks_csv(tracks_path);
+  if (!o.ignore_stamps) {
+    io::check_scan_stamps(objects, gt_path.string(), tracks, tracks_path.string());
+  }
+  std::vector<eval::GroundTruthObject> gt;
+  gt.reserve(objects.size());
+  for (const io::ObjectRow& r : objects) {
+    gt.push_back({static_cast<std::int64_t>(r.scan), static_cast<std::int64_t>(r.id), r.class_name,
+                  static_cast<std::int64_t>(r.points), r.centroid});
+  }
+  std::vector<eval::TrackObservation> hyps;
+  hyps.reserve(tracks.size());
+  for (const io::TrackRow& r : tracks) {
+    hyps.push_back({static_cast<std::int64_t>(r.scan), static_cast<std::int64_t>(r.id), r.position,
+                    r.dynamic, r.ever_dynamic});
+  }
+  eval::TrackingEvalOptions options;
+  options.threshold_m = o.threshold_m;
+  options.target_class = o.target_class;
+  options.min_points = o.min_points;
+  options.all_hypotheses = o.all_hypotheses;
+  return eval::evaluate_tracks(gt, hyps, options);
+}
+
+eval::TrackingEvalResult evaluate_motchallenge(const fs::path& gt_path, const fs::path& tracks_path,
+                                               const EvalOptions& o) {
+  const auto convert = [](const std::vector<io::MotChallengeRow>& rows) {
+    std::vector<eval::BoxObservation> out;
+    out.reserve(rows.size());
+    for (const io::MotChallengeRow& r : rows) {
+      out.push_back({r.frame, r.id, r.left, r.top, r.width, r.height});
+    }
+    return out;
+  };
+  const auto gt = convert(io::read_motchallenge(gt_path, true));
+  const auto hyps = convert(io::read_motchallenge(tracks_path, false));
+  eval::TrackingEvalResult result;
+  result.summary = eval::evaluate_boxes(gt, hyps, o.min_iou);
+  result.gt_rows_used = static_cast<std::int64_t>(gt.size());
+  result.hypotheses_total = result.summary.hypotheses;
+  result.hypotheses_evaluated = result.summary.hypotheses;
+  return result;
+}
+
+nlohmann::ordered_json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json metrics_json(const eval::MotSummary& s) {
+  return {
+      {"mota", number_or_null(s.mota())},
+      {"motp", number_or_null(s.motp())},
+      {"true_positives", s.true_positives()},
+      {"matches", s.matches},
+      {"false_positives", s.false_positives},
+      {"misses", s.misses},
+      {"id_switches", s.switches},
+      {"fragmentations", s.fragmentations},
+      {"recall", number_or_null(s.recall())},
+      {"precision", number_or_null(s.precision())},
+      {"mostly_tracked", s.mostly_tracked},
+      {"partially_tracked", s.partially_tracked},
+      {"mostly_lost", s.mostly_lost},
+      {"mostly_tracked_ratio", number_or_null(s.mostly_tracked_ratio())},
+      {"partially_tracked_ratio", number_or_null(s.partially_tracked_ratio())},
+      {"mostly_lost_ratio", number_or_null(s.mostly_lost_ratio())},
+      {"idf1", number_or_null(s.idf1())},
+      {"idp", number_or_null(s.idp())},
+      {"idr", number_or_null(s.idr())},
+      {"id_true_positives", s.id_true_positives},
+      {"id_false_positives", s.id_false_positives},
+      {"id_false_negatives", s.id_false_negatives},
+      {"gt_objects", s.gt_objects},
+      {"hypotheses", s.hypotheses},
+      {"gt_presences", s.gt_presences},
+      {"hypothesis_presences", s.hypothesis_presences},
+      {"frames", s.frames},
+  };
+}
+
+std::string fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSummary& overall,
+                const EvalOptions& o) {
+  const bool mot = o.format == "motchallenge";
+  if (mot) {
+    std::cout << "MOTChallenge boxes: a pair matches when IoU >= " << o.min_iou
+              << "; MOTP is the mean (1 - IoU) of the matches\n";
+  } else {
+    std::cout << "ground truth: class '" << o.target_class << "' with >= " << o.min_points
+              << " hit points; match when distance < " << o.threshold_m << " m; "
+              << (o.all_hypotheses ? "all hypotheses"
+                                   : "paper mode: hypotheses dynamic at least once")
+              << "\n";
+  }
+  for (const SequenceResult& s : sequences) {
+    std::cout << "sequence " << s.name << ": gt " << s.gt_path << ", tracks " << s.tracks_path;
+    if (!mot) {
+      std::cout << " (" << s.result.gt_rows_used << " ground-truth rows used, "
+                << s.result.gt_rows_skipped << " skipped; " << s.result.hypotheses_evaluated
+                << " of " << s.result.hypotheses_total << " hypotheses evaluated)";
+    }
+    std::cout << "\n";
+  }
+
+  std::vector<std::string> header = {"metric"};
+  std::vector<const eval::MotSummary*> columns;
+  for (const SequenceResult& s : sequences) {
+    header.push_back(s.name);
+    columns.push_back(&s.result.summary);
+  }
+  if (sequences.size() > 1) {
+    header.push_back("overall");
+    columns.push_back(&overall);
+  }
+  using Getter = std::string (*)(const eval::MotSummary&);
+  const std::vector<std::pair<std::string, Getter>> rows = {
+      {"MOTA", [](const eval::MotSummary& s) { return fixed(s.mota(), 4); }},
+      {mot ? "MOTP (1-IoU)" : "MOTP (m)",
+       [](const eval::MotSummary& s) { return fixed(s.motp(), 4); }},
+      {"TP (matches+IDSW)",
+       [](const eval::MotSummary& s) { return std::to_string(s.true_positives()); }},
+      {"matches", [](const eval::MotSummary& s) { return std::to_string(s.matches); }},
+      {"FP", [](const eval::MotSummary& s) { return std::to_string(s.false_positives); }},
+      {"FN (misses)", [](const eval::MotSummary& s) { return std::to_string(s.misses); }},
+      {"IDSW", [](const eval::MotSummary& s) { return std::to_string(s.switches); }},
+      {"fragmentations",
+       [](const eval::MotSummary& s) { return std::to_string(s.fragmentations); }},
+      {"recall", [](const eval::MotSummary& s) { return fixed(s.recall(), 4); }},
+      {"precision", [](const eval::MotSummary& s) { return fixed(s.precision(), 4); }},
+      {"MT", [](const eval::MotSummary& s) { return std::to_string(s.mostly_tracked); }},
+      {"PT", [](const eval::MotSummary& s) { return std::to_string(s.partially_tracked); }},
+      {"ML", [](const eval::MotSummary& s) { return std::to_string(s.mostly_lost); }},
+      {"MT ratio", [](const eval::MotSummary& s) { return fixed(s.mostly_tracked_ratio(), 4); }},
+      {"PT ratio", [](const eval::MotSummary& s) { return fixed(s.partially_tracked_ratio(), 4); }},
+      {"ML ratio", [](const eval::MotSummary& s) { return fixed(s.mostly_lost_ratio(), 4); }},
+      {"IDF1", [](const eval::MotSummary& s) { return fixed(s.idf1(), 4); }},
+      {"IDP", [](const eval::MotSummary& s) { return fixed(s.idp(), 4); }},
+      {"IDR", [](const eval::MotSummary& s) { return fixed(s.idr(), 4); }},
+      {"GT objects", [](const eval::MotSummary& s) { return std::to_string(s.gt_objects); }},
+      {"hypotheses", [](const eval::MotSummary& s) { return std::to_string(s.hypotheses); }},
+      {"GT presences", [](const eval::MotSummary& s) { return std::to_string(s.gt_presences); }},
+      {"hyp presences",
+       [](const eval::MotSummary& s) { return std::to_string(s.hypothesis_presences); }},
+      {"frames", [](const eval::MotSummary& s) { return std::to_string(s.frames); }},
+  };
+  std::vector<std::size_t> width(header.size(), 0);
+  for (std::size_t c = 0; c < header.size(); ++c) width[c] = header[c].size();
+  std::vector<std::vector<std::string>> cells;
+  for (const auto& [label, get] : rows) {
+    std::vector<std::string> line = {label};
+    for (const eval::MotSummary* s : columns) line.push_back(get(*s));
+    for (std::size_t c = 0; c < line.size(); ++c) width[c] = std::max(width[c], line[c].size());
+    cells.push_back(std::move(line));
+  }
+  const auto print_line = [&](const std::vector<std::string>& line) {
+    for (std::size_t c = 0; c < line.size(); ++c) {
+      const std::size_t pad = width[c] - line[c].size();
+      if (c == 0) {
+        std::cout << line[c] << std::string(pad, ' ');
+      } else {
+        std::cout << "  " << std::string(pad, ' ') << line[c];
+      }
+    }
+    std::cout << "\n";
+  };
+  print_line(header);
+  for (const auto& line : cells) print_line(line);
+}
+
+void run_eval(const EvalOptions& o) {
+  if (o.gt.size() != o.tracks.size()) {
+    throw core::InputError("--gt given " + std::to_string(o.gt.size()) + " times but --tracks " +
+                           std::to_string(o.tracks.size()) +
+                           " times: give one tracks file per sequence, in the same order");
+  }
+  const bool mot = o.format == "motchallenge";
+  std::vector<SequenceResult> sequences;
+  eval::MotSummary overall;
+  for (std::size_t k = 0; k < o.gt.size(); ++k) {
+    SequenceResult s;
+    const fs::path gt_path = resolve_gt(o.gt[k], mot, s.name);
+    const fs::path tracks_path(o.tracks[k]);
+    s.gt_path = gt_path.string();
+    s.tracks_path = tracks_path.string();
+    s.result = mot ? evaluate_motchallenge(gt_path, tracks_path, o)
+                   : evaluate_ringtrack(gt_path, tracks_path, o);
+    overall += s.result.summary;
+    sequences.push_back(std::move(s));
+  }
+
+  if (!o.json) {
+    print_text(sequences, overall, o);
+    return;
+  }
+  nlohmann::ordered_json out;
+  out["format"] = o.format;
+  if (mot) {
+    out["min_iou"] = o.min_iou;
+    out["match_rule"] = "IoU >= min_iou";
+    out["motp_unit"] = "1-IoU";
+  } else {
+    out["threshold_m"] = o.threshold_m;
+    out["match_rule"] = "distance < threshold_m";
+    out["motp_unit"] = "m";
+    out["class"] = o.target_class;
+    out["min_points"] = o.min_points;
+    out["all_hypotheses"] = o.all_hypotheses;
+  }
+  out["sequences"] = nlohmann::ordered_json::array();
+  for (const SequenceResult& s : sequences) {
+    nlohmann::ordered_json j = {{"name", s.name}, {"gt", s.gt_path}, {"tracks", s.tracks_path}};
+    if (!mot) {
+      j["gt_rows_used"] = s.result.gt_rows_used;
+      j["gt_rows_skipped"] = s.result.gt_rows_skipped;
+      j["hypotheses_total"] = s.result.hypotheses_total;
+      j["hypotheses_evaluated"] = s.result.hypotheses_evaluated;
+    }
+    j["metrics"] = metrics_json(s.result.summary);
+    out["sequences"].push_back(std::move(j));
+  }
+  out["overall"] = metrics_json(overall);
+  std::cout << out.dump(2) << "\n";
+}
+
+}  // namespace
+
+void register_eval(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "eval", "CLEAR MOT, MT/PT/ML and IDF1 of tracks against ground truth (docs/evaluation.md)");
+  auto o = std::make_shared<EvalOptions>();
+  cmd->add_option("--gt", o->gt,
+                  "ground truth: SEQUENCE_DIR (its objects.csv; motchallenge: its gt/gt.txt) or "
+                  "the file; repeat for several sequences")
+      ->required();
+  cmd->add_option("--tracks", o->tracks,
+                  "tracks.csv of `ringtrack run` (motchallenge: a result file); one per --gt")
+      ->required();
+  cmd->add_option("--format", o->format, "ringtrack (objects.csv/tracks.csv) or motchallenge")
+      ->check(CLI::IsMember({"ringtrack", "motchallenge"}))
+      ->capture_default_str();
+  cmd->add_option("--threshold", o->threshold_m,
+                  "a pair matches when its 3-D distance is below this, metres")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  cmd->add_option("--min-iou", o->min_iou, "motchallenge: a pair matches when IoU >= this")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  cmd->add_flag("--all-hypotheses", o->all_hypotheses,
+                "evaluate every hypothesis (default, as the paper: only those dynamic at least "
+                "once)");
+  cmd->add_option("--class", o->target_class, "ground-truth class to evaluate")
+      ->capture_default_str();
+  cmd->add_option("--min-points", o->min_points,
+                  "a ground-truth object counts in a scan with at least this many hit points")
+      ->check(CLI::Range(std::int64_t{1}, std::int64_t{1} << 40))
+      ->capture_default_str();
+  cmd->add_flag("--ignore-stamps", o->ignore_stamps,
+                "do not require equal stamps for the same scan index in both files");
+  cmd->add_flag("--json", o->json, "print JSON instead of a table");
+  cmd->callback([o] { run_eval(*o); });
+}
+
+}  // namespace ringtrack::cli

@@ -1,0 +1,59 @@
+// Detection benchmark: one VLP-16 scan with ten people (open field), segmented once outside the
+// timing; only Detector::detect() is timed.
+
+#include <benchmark/benchmark.h>
+
+#include "ringtrack/detection/detector.hpp"
+#include "ringtrack/segmentation/segmenter.hpp"
+#include "ringtrack/sim/simple_scene.hpp"
+#include "support/naive_detection.hpp"
+
+namespace {
+
+using namespace ringtrack;
+
+struct SegmentedScan {
+  sim::RenderedScan rendered;
+  std::vector<std::uint8_t> labels;
+};
+
+const SegmentedScan& ten_people() {
+  static const SegmentedScan scan = [] {
+    SegmentedScan s{sim::render(core::SensorModel::vlp16(), sim::SimpleScene::open_field(10)), {}};
+    segmentation::Segmenter segmenter{core::SegmentationConfig{}};
+    segmenter.segment(s.rendered.scan, s.labels);
+    return s;
+  }();
+  return scan;
+}
+
+void BM_Detect10People(benchmark::State& state) {
+  const auto& s = ten_people();
+  detection::Detector detector{core::DetectionConfig{}};
+  const core::Pose pose;
+  const std::vector<Eigen::Vector3f> predictions;
+  detector.detect(s.rendered.scan, s.labels, pose, predictions);  // grows the buffers once
+  for (auto _ : state) {
+    const auto& detections = detector.detect(s.rendered.scan, s.labels, pose, predictions);
+    benchmark::DoNotOptimize(detections.data());
+  }
+  state.counters["detections"] = static_cast<double>(detector.stats().detections);
+  state.counters["segment_points"] = static_cast<double>(detector.stats().segment_points);
+}
+
+// The O(n^2) union-find reference on the same scan, for scale.
+void BM_Detect10PeopleNaive(benchmark::State& state) {
+  const auto& s = ten_people();
+  for (auto _ : state) {
+    benchmark::DoNotOptimize(
+        testing::naive_detect(s.rendered.scan, s.labels, core::DetectionConfig{}, core::Pose{}));
+  }
+}
+
+}  // namespace
+
+BENCHMARK(BM_Detect10People)
+    ->Unit(benchmark::kMicrosecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_Detect10PeopleNaive)->Unit(benchmark::kMillisecond);

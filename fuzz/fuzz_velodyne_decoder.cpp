@@ -1,0 +1,76 @@
+// libFuzzer target: a stream of Velodyne packets through the packet parser, the flat point
+// decoder and the scan assembler. Documented errors (core::Error) are fine; crashes, sanitizer
+// reports and hangs are bugs. Input: one control byte (options), then packets, each led by a
+// byte choosing its size and whether to repair its block flags and factory bytes (so that the
+// fuzzer reaches scan assembly, not only the rejection paths).
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/core/sensor_model.hpp"
+#include "ringtrack/io/velodyne_decoder.hpp"
+#include "ringtrack/io/velodyne_packet.hpp"
+
+using namespace ringtrack;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  if (size < 2) return 0;
+  const std::uint8_t control = data[0];
+  io::VelodyneDecoderOptions options;
+  options.return_selection = static_cast<io::VelodyneReturnSelection>(control % 3);
+  options.keep_partial_scans = (control & 0x04) != 0;
+  if ((control & 0x08) != 0) options.model = (control & 0x10) != 0 ? "vlp32c" : "vlp16";
+  options.time_source =
+      (control & 0x20) != 0 ? io::VelodyneTimeSource::kSensor : io::VelodyneTimeSource::kHost;
+  options.cut_azimuth_deg = (control >> 6) * 90.0;
+  const std::uint8_t product = (control & 0x10) != 0 ? 0x28 : 0x22;
+  const std::uint8_t mode = static_cast<std::uint8_t>(0x37 + (control >> 6) % 3);
+  try {
+    io::VelodyneDecoder decoder(options);
+    const auto model = core::SensorModel::vlp16();
+    const auto layout = io::VelodyneLayout::of(model);
+    io::VelodyneParsedPacket parsed;
+    std::vector<io::VelodynePoint> points;
+    std::vector<std::uint8_t> packet;
+    std::int64_t stamp_ns = 1'700'000'000'000'000'000;
+    std::size_t at = 1;
+    while (at < size) {
+      const std::uint8_t head = data[at++];
+      const std::size_t n = (head & 0x80) != 0 ? static_cast<std::size_t>(head & 0x3F) * 23 : 1206;
+      const std::size_t take = std::min(n, size - at);
+      packet.assign(n, 0);
+      std::memcpy(packet.data(), data + at, take);
+      at += take;
+      if ((head & 0x40) != 0 && n == 1206) {
+        for (std::size_t b = 0; b < 12; ++b) {
+          packet[b * 100] = 0xFF;
+          packet[b * 100 + 1] = 0xEE;
+          packet[b * 100 + 3] = static_cast<std::uint8_t>(packet[b * 100 + 3] % 141);  // < 36000
+          if (mode == 0x39 && b % 2 == 1) {
+            packet[b * 100 + 2] = packet[b * 100 - 98];
+            packet[b * 100 + 3] = packet[b * 100 - 97];
+          }
+        }
+        packet[1204] = mode;
+        packet[1205] = product;
+      }
+      stamp_ns += static_cast<std::int64_t>(head & 0x0F) * 400'000;
+      if (io::parse_velodyne_packet(packet, layout, 0.2, parsed) == io::VelodynePacketStatus::kOk) {
+        points.clear();
+        io::append_velodyne_points(parsed, model, points);
+      }
+      decoder.add_packet(packet, stamp_ns);
+      while (auto scan = decoder.pop_scan()) {
+        if (scan->size() != static_cast<std::size_t>(scan->rings()) * scan->columns())
+          __builtin_trap();
+      }
+    }
+    decoder.finish();
+    while (decoder.pop_scan()) {
+    }
+  } catch (const core::Error&) {
+  }
+  return 0;
+}

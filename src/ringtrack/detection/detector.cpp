@@ -1,0 +1,294 @@
+#include "ringtrack/detection/detector.hpp"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "ringtrack/core/error.hpp"
+
+namespace ringtrack::detection {
+namespace {
+
+constexpr std::uint8_t kNone = 0;       // not a segment point (or already reset)
+constexpr std::uint8_t kUnvisited = 1;  // segment point not yet in a cluster
+constexpr std::uint8_t kVisited = 2;    // segment point already in a cluster
+
+}  // namespace
+
+struct Detector::Frame {
+  int rings{0};
+  int columns{0};
+  Eigen::Matrix3d rotation{Eigen::Matrix3d::Identity()};
+  Eigen::Vector3d translation{Eigen::Vector3d::Zero()};
+  const std::vector<Eigen::Vector3f>* predictions{nullptr};
+};
+
+Detector::Detector(const core::DetectionConfig& config) : config_(config) {
+  if (config_.neighbor_radius < 0) {
+    throw core::ConfigError("key 'detection.neighbor_radius' must not be negative, got " +
+                            std::to_string(config_.neighbor_radius));
+  }
+  if (config_.min_cluster_points < 1) {
+    throw core::ConfigError("key 'detection.min_cluster_points' must be at least 1, got " +
+                            std::to_string(config_.min_cluster_points));
+  }
+  if (!(config_.join_distance_m >= 0.0)) {
+    throw core::ConfigError("key 'detection.join_distance_m' must not be negative");
+  }
+  if (!(config_.min_height_ring_gap_deg >= 0.0 && config_.min_height_ring_gap_deg < 90.0)) {
+    throw core::ConfigError("key 'detection.min_height_ring_gap_deg' must lie in [0, 90)");
+  }
+  const auto theta = static_cast<float>(config_.join_distance_m);
+  join_threshold_ = config_.join_rule == core::JoinRule::kEuclidean ? theta * theta : theta;
+  min_height_gap_tan_ =
+      static_cast<float>(std::tan(config_.min_height_ring_gap_deg * std::numbers::pi / 180.0));
+}
+
+void Detector::build_offsets(int columns) {
+  // Window offsets with the column offset reduced into (-columns, columns), so one conditional
+  // add or subtract wraps a column; duplicates (windows wider than the ring) are dropped.
+  offsets_.clear();
+  const int r = config_.neighbor_radius;
+  for (int dr = -r; dr <= r; ++dr) {
+    const int rem = r - std::abs(dr);
+    for (int dc = -rem; dc <= rem; ++dc) {
+      const int reduced = dc % columns;
+      const int canonical = (reduced + columns) % columns;
+      if (dr == 0 && canonical == 0) continue;
+      const bool seen = std::any_of(offsets_.begin(), offsets_.end(), [&](const Offset& o) {
+        return o.d_ring == dr && (o.d_column + columns) % columns == canonical;
+      });
+      if (!seen) offsets_.push_back({dr, reduced});
+    }
+  }
+  offsets_columns_ = columns;
+}
+
+void Detector::collect_segment_points(const core::OrganizedScan& scan,
+                                      const std::vector<std::uint8_t>& labels) {
+  seeds_.clear();
+  const std::size_t n = scan.size();
+  const std::uint8_t* label = labels.data();
+  const core::ReturnStatus* status = scan.statuses().data();
+  std::uint8_t* state = state_.data();
+  auto check = [&](std::size_t i) {
+    if (label[i] == kSegmentLabel && status[i] == core::ReturnStatus::kValid) {
+      seeds_.push_back(static_cast<std::uint32_t>(i));
+      state[i] = kUnvisited;
+    }
+  };
+  // Segment points are a few percent of the cells: skip eight background labels at a time.
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    std::uint64_t word = 0;
+    std::memcpy(&word, label + i, sizeof word);
+    if (word == 0) continue;
+    for (std::size_t k = i; k < i + 8; ++k) check(k);
+  }
+  for (; i < n; ++i) check(i);
+}
+
+template <core::JoinRule kRule>
+void Detector::grow_clusters(const core::OrganizedScan& scan, const Frame& frame) {
+  const int rings = frame.rings;
+  const int columns = frame.columns;
+  const float* range = scan.ranges().data();
+  const float* x = scan.xs().data();
+  const float* y = scan.ys().data();
+  const float* z = scan.zs().data();
+  const float threshold = join_threshold_;
+  std::uint8_t* state = state_.data();
+  const Offset* offsets_begin = offsets_.data();
+  const Offset* offsets_end = offsets_begin + offsets_.size();
+
+  for (const std::uint32_t seed : seeds_) {
+    if (state[seed] != kUnvisited) continue;
+    // Breadth-first growth with the cluster vector as the queue: each cluster ends up as one
+    // contiguous run, and nothing is popped or reallocated once capacity has grown.
+    cluster_.clear();
+    cluster_.push_back(seed);
+    state[seed] = kVisited;
+    for (std::size_t head = 0; head < cluster_.size(); ++head) {
+      const std::uint32_t p = cluster_[head];
+      const int ring = static_cast<int>(p / static_cast<std::uint32_t>(columns));
+      const int column = static_cast<int>(p) - ring * columns;
+      for (const Offset* o = offsets_begin; o != offsets_end; ++o) {
+        const int rr = ring + o->d_ring;
+        if (rr < 0 || rr >= rings) continue;
+        int cc = column + o->d_column;
+        if (cc < 0) {
+          cc += columns;
+        } else if (cc >= columns) {
+          cc -= columns;
+        }
+        const auto q = static_cast<std::uint32_t>(rr * columns + cc);
+        if (state[q] != kUnvisited) continue;
+        bool joins = false;
+        if constexpr (kRule == core::JoinRule::kEuclidean) {
+          const float dx = x[p] - x[q], dy = y[p] - y[q], dz = z[p] - z[q];
+          joins = dx * dx + dy * dy + dz * dz < threshold;
+        } else {
+          joins = std::abs(range[p] - range[q]) < threshold;
+        }
+        if (!joins) continue;
+        state[q] = kVisited;
+        cluster_.push_back(q);
+      }
+    }
+    evaluate_cluster(scan, frame);
+  }
+}
+
+core::Detection& Detector::next_detection() {
+  // Reuses the Detection objects (and their index buffers) of earlier calls.
+  if (spare_.empty()) {
+    detections_.emplace_back();
+  } else {
+    detections_.push_back(std::move(spare_.back()));
+    spare_.pop_back();
+  }
+  return detections_.back();
+}
+
+void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame) {
+  const std::size_t n = cluster_.size();
+  if (n < static_cast<std::size_t>(config_.min_cluster_points)) {
+    ++stats_.too_small;
+    return;
+  }
+  ++stats_.clusters;
+
+  const float* range = scan.ranges().data();
+  const float* x = scan.xs().data();
+  const float* y = scan.ys().data();
+  const float* z = scan.zs().data();
+  const auto columns = static_cast<std::uint32_t>(frame.columns);
+  const auto top_ring_start = static_cast<std::uint32_t>(frame.rings - 1) * columns;
+
+  world_.resize(n);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -lo;
+  double range_sum = 0.0;
+  bool touches_top_or_bottom = false;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t i = cluster_[k];
+    const Eigen::Vector3d w =
+        frame.rotation * Eigen::Vector3d(x[i], y[i], z[i]) + frame.translation;
+    world_[k] = w;
+    sum += w;
+    lo = lo.cwiseMin(w);
+    hi = hi.cwiseMax(w);
+    range_sum += range[i];
+    touches_top_or_bottom |= i < columns || i >= top_ring_start;
+  }
+  const double inv_n = 1.0 / static_cast<double>(n);
+  const Eigen::Vector3d mean = sum * inv_n;
+  const double height = hi.z() - lo.z();
+  const double diagonal = std::hypot(hi.x() - lo.x(), hi.y() - lo.y());
+  const double lowest = lo.z();
+  // Rings this far apart sample an object of height h as an extent down to h minus two ring
+  // gaps, so the extent is credited with one gap at the cluster's mean range.
+  const double height_allowance = range_sum * inv_n * static_cast<double>(min_height_gap_tan_);
+
+  const bool too_high = lowest > config_.max_altitude_m;
+  const bool too_tall = height > config_.max_height_m;
+  const bool too_wide = diagonal > config_.max_diagonal_m;
+  const bool too_short = !touches_top_or_bottom && height + height_allowance < config_.min_height_m;
+  bool relaxed = false;
+  if (too_high || too_tall || too_wide || too_short) {
+    bool near_prediction = false;
+    const double r2 = config_.relaxed_radius_m * config_.relaxed_radius_m;
+    for (const Eigen::Vector3f& p : *frame.predictions) {
+      const double dx = static_cast<double>(p.x()) - mean.x();
+      const double dy = static_cast<double>(p.y()) - mean.y();
+      if (dx * dx + dy * dy <= r2) {
+        near_prediction = true;
+        break;
+      }
+    }
+    if (near_prediction && !too_high && !too_tall && diagonal <= config_.relaxed_max_diagonal_m) {
+      relaxed = true;
+    } else {
+      if (too_high) {
+        ++stats_.too_high;
+      } else if (too_tall) {
+        ++stats_.too_tall;
+      } else if (too_wide) {
+        ++stats_.too_wide;
+      } else {
+        ++stats_.too_short;
+      }
+      return;
+    }
+  }
+
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector3d d = world_[k] - mean;
+    cov.noalias() += d * d.transpose();
+  }
+  cov *= inv_n;
+  const double floor = config_.min_position_stddev_m * config_.min_position_stddev_m;
+  for (int a = 0; a < 3; ++a) cov(a, a) = std::max(cov(a, a), floor);
+
+  core::Detection& d = next_detection();
+  d.centroid = mean.cast<float>();
+  d.covariance = cov.cast<float>();
+  d.box.min = lo.cast<float>();
+  d.box.max = hi.cast<float>();
+  d.indices.assign(cluster_.begin(), cluster_.end());
+  std::sort(d.indices.begin(), d.indices.end());
+  d.relaxed = relaxed;
+  stats_.relaxed += relaxed ? 1 : 0;
+  ++stats_.detections;
+}
+
+const std::vector<core::Detection>& Detector::detect(
+    const core::OrganizedScan& scan, const std::vector<std::uint8_t>& segment_labels,
+    const core::Pose& sensor_pose, const std::vector<Eigen::Vector3f>& predicted_positions_world) {
+  const std::size_t n = scan.size();
+  if (segment_labels.size() != n) {
+    throw core::InputError("detection: expected one segment label per cell (" + std::to_string(n) +
+                           "), got " + std::to_string(segment_labels.size()));
+  }
+  if (n > static_cast<std::size_t>(std::numeric_limits<std::int32_t>::max())) {
+    throw core::InputError("detection: a scan of " + std::to_string(n) +
+                           " cells exceeds the 31-bit grid arithmetic");
+  }
+  stats_ = {};
+  // Park last call's detections (with their buffers) for reuse.
+  while (!detections_.empty()) {
+    spare_.push_back(std::move(detections_.back()));
+    detections_.pop_back();
+  }
+  if (n == 0) return detections_;
+
+  if (state_.size() != n || state_dirty_) state_.assign(n, kNone);
+  if (offsets_columns_ != scan.columns()) build_offsets(scan.columns());
+
+  Frame frame;
+  frame.rings = scan.rings();
+  frame.columns = scan.columns();
+  frame.rotation = sensor_pose.rotation.normalized().toRotationMatrix();
+  frame.translation = sensor_pose.translation;
+  frame.predictions = &predicted_positions_world;
+
+  state_dirty_ = true;
+  collect_segment_points(scan, segment_labels);
+  stats_.segment_points = seeds_.size();
+  if (config_.join_rule == core::JoinRule::kEuclidean) {
+    grow_clusters<core::JoinRule::kEuclidean>(scan, frame);
+  } else {
+    grow_clusters<core::JoinRule::kRangeDifference>(scan, frame);
+  }
+  for (const std::uint32_t i : seeds_) state_[i] = kNone;
+  state_dirty_ = false;
+  return detections_;
+}
+
+}  // namespace ringtrack::detection

@@ -1,0 +1,105 @@
+#pragma once
+/// Detection (paper III.C, Alg. 1): region growing on the grid and the object model.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "ringtrack/core/config.hpp"
+#include "ringtrack/core/detection.hpp"
+#include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/core/pose.hpp"
+
+namespace ringtrack::detection {
+
+/// The label value that marks a segment point (segmentation::kSegment); detection depends on
+/// core only, so it names the value itself.
+inline constexpr std::uint8_t kSegmentLabel = 1;
+
+/// What happened to the clusters of the last detect() call, for diagnostics and tuning.
+/// A rejected cluster counts under the first failed test of the strict model, in the order
+/// too_high, too_tall, too_wide, too_short.
+struct DetectorStats {
+  std::size_t segment_points{0};  ///< valid cells labelled kSegmentLabel
+  std::size_t clusters{0};        ///< clusters with at least min_cluster_points points
+  std::size_t too_small{0};       ///< clusters dropped for having fewer points
+  std::size_t too_high{0};        ///< lowest point above max_altitude_m
+  std::size_t too_tall{0};        ///< vertical extent above max_height_m
+  std::size_t too_wide{0};        ///< horizontal diagonal above the model's maximum
+  std::size_t too_short{0};       ///< vertical extent (plus ring-gap allowance) below min_height_m
+  std::size_t relaxed{0};         ///< accepted by the relaxed model only
+  std::size_t detections{0};      ///< accepted clusters (strict and relaxed)
+};
+
+/// Clusters the segment points of a scan by region growing on the rings x columns grid and keeps
+/// the clusters that fit the object model in the world frame.
+///
+/// Region growing: a segment point joins a neighbour within Manhattan distance neighbor_radius
+/// on the grid (columns wrap across the 0/360 degree seam, rings do not) when their range
+/// difference (or 3-D distance, per join_rule) is below join_distance_m. Because the columns
+/// wrap, an object cut by the seam is one cluster without a separate fusion step.
+///
+/// Object model (world frame): vertical extent in [min_height_m, max_height_m], horizontal box
+/// diagonal <= max_diagonal_m, lowest point <= max_altitude_m. The minimum-height test is
+/// skipped for clusters with a point in the top or bottom ring and credits the extent with
+/// range * tan(min_height_ring_gap_deg) (sparse rings under-sample height). A cluster that fails
+/// this strict model but whose centroid lies within relaxed_radius_m (horizontally) of a
+/// predicted track position is tested without the minimum height and with
+/// relaxed_max_diagonal_m; it is flagged relaxed.
+///
+/// Cost: O(cells / 8) to find the segment points plus O(segment points * window cells); the
+/// buffers live in the detector, so steady-state calls do not allocate.
+class Detector {
+ public:
+  /// Throws core::ConfigError when a setting cannot work (negative radius, zero minimum size).
+  explicit Detector(const core::DetectionConfig& config);
+
+  /// Detects objects in a scan. segment_labels holds one label per cell (kSegmentLabel marks a
+  /// segment point; invalid cells are ignored whatever their label); sensor_pose maps the
+  /// sensor frame to the world; predicted_positions_world are the tracker's predictions that
+  /// enable the relaxed model. Detections come in order of their smallest grid index, each
+  /// with its grid indices ascending. The returned reference stays valid until the next call.
+  /// Throws core::InputError when the labels do not match the scan's size.
+  const std::vector<core::Detection>& detect(
+      const core::OrganizedScan& scan, const std::vector<std::uint8_t>& segment_labels,
+      const core::Pose& sensor_pose,
+      const std::vector<Eigen::Vector3f>& predicted_positions_world = {});
+
+  /// The detections of the last call.
+  [[nodiscard]] const std::vector<core::Detection>& detections() const { return detections_; }
+  /// Counters of the last call.
+  [[nodiscard]] const DetectorStats& stats() const { return stats_; }
+  /// The settings in use.
+  [[nodiscard]] const core::DetectionConfig& config() const { return config_; }
+
+ private:
+  struct Offset {
+    int d_ring;
+    int d_column;
+  };
+  struct Frame;  // per-call constants (grid size, pose, predictions)
+
+  void build_offsets(int columns);
+  void collect_segment_points(const core::OrganizedScan& scan,
+                              const std::vector<std::uint8_t>& labels);
+  template <core::JoinRule kRule>
+  void grow_clusters(const core::OrganizedScan& scan, const Frame& frame);
+  void evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame);
+  core::Detection& next_detection();
+
+  core::DetectionConfig config_;
+  float join_threshold_{0};             // theta, squared for the Euclidean rule
+  float min_height_gap_tan_{0};         // tan(min_height_ring_gap_deg)
+  int offsets_columns_{-1};             // column count offsets_ was built for
+  std::vector<Offset> offsets_;         // window cells (Manhattan radius), wrapped columns reduced
+  std::vector<std::uint8_t> state_;     // per cell: 0 none, 1 unvisited segment point, 2 visited
+  bool state_dirty_{false};             // set while state_ may hold marks (exception safety)
+  std::vector<std::uint32_t> seeds_;    // segment cells in grid order
+  std::vector<std::uint32_t> cluster_;  // cells of the cluster being grown, in visit order
+  std::vector<Eigen::Vector3d> world_;  // world points of the cluster being evaluated
+  std::vector<core::Detection> detections_;
+  std::vector<core::Detection> spare_;  // detections from earlier calls, kept for their buffers
+  DetectorStats stats_;
+};
+
+}  // namespace ringtrack::detection

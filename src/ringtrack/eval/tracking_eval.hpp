@@ -1,0 +1,80 @@
+#pragma once
+/// Sequence-level drivers: 3-D ground-truth objects vs tracks (the paper's protocol) and
+/// MOTChallenge-style 2-D boxes (IoU), both feeding a MotAccumulator frame by frame.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "ringtrack/eval/mot_accumulator.hpp"
+
+namespace ringtrack::eval {
+
+/// One ground-truth object in one scan (a row of objects.csv).
+struct GroundTruthObject {
+  std::int64_t scan = 0;
+  std::int64_t id = 0;
+  std::string class_name;
+  std::int64_t points = 0;       ///< LiDAR returns that hit the object in this scan
+  Eigen::Vector3d centroid_m{};  ///< centroid of those hit points, world frame
+};
+
+/// One hypothesis in one scan (a row of tracks.csv).
+struct TrackObservation {
+  std::int64_t scan = 0;
+  std::int64_t id = 0;
+  Eigen::Vector3d position_m{};  ///< world frame
+  bool dynamic = false;          ///< classified dynamic in this scan
+  bool ever_dynamic = false;     ///< classified dynamic in this or an earlier scan
+};
+
+/// Options of the 3-D evaluation.
+struct TrackingEvalOptions {
+  /// A pair matches when its Euclidean distance is strictly below this (paper: 0.5 m).
+  double threshold_m = 0.5;
+  /// Only ground-truth objects of this class are evaluated (exact, case-sensitive).
+  std::string target_class = "person";
+  /// Only ground-truth objects with at least this many hit points in a scan count in that scan.
+  std::int64_t min_points = 1;
+  /// False (paper mode): only hypotheses flagged dynamic in at least one scan are evaluated, in
+  /// all their scans. True: every hypothesis.
+  bool all_hypotheses = false;
+};
+
+/// Metrics of one sequence plus what the filters left out.
+struct TrackingEvalResult {
+  MotSummary summary;
+  std::int64_t gt_rows_used = 0;          ///< ground-truth rows that passed class and min_points
+  std::int64_t gt_rows_skipped = 0;       ///< rows of another class or with too few points
+  std::int64_t hypotheses_total = 0;      ///< distinct track ids in the input
+  std::int64_t hypotheses_evaluated = 0;  ///< distinct track ids kept (paper mode: ever dynamic)
+};
+
+/// Evaluates tracks against ground truth scan by scan (scans in increasing order, ids in
+/// increasing order within a scan). Throws core::InputError for duplicate (scan, id) pairs,
+/// non-finite positions or min_points < 1.
+[[nodiscard]] TrackingEvalResult evaluate_tracks(std::span<const GroundTruthObject> ground_truth,
+                                                 std::span<const TrackObservation> tracks,
+                                                 const TrackingEvalOptions& options = {});
+
+/// An axis-aligned image box in one frame (a row of a MOTChallenge file).
+struct BoxObservation {
+  std::int64_t frame = 0;
+  std::int64_t id = 0;
+  double left = 0.0;  ///< x of the top-left corner, pixels
+  double top = 0.0;   ///< y of the top-left corner, pixels
+  double width = 0.0;
+  double height = 0.0;
+};
+
+/// Intersection over union of two boxes on continuous coordinates; 0 when the union is empty.
+[[nodiscard]] double box_iou(const BoxObservation& a, const BoxObservation& b);
+
+/// MOTChallenge-style evaluation: distance 1 - IoU, a pair matches when IoU >= min_iou.
+/// Throws core::InputError for duplicate (frame, id) pairs or negative/non-finite boxes.
+[[nodiscard]] MotSummary evaluate_boxes(std::span<const BoxObservation> ground_truth,
+                                        std::span<const BoxObservation> hypotheses,
+                                        double min_iou = 0.5);
+
+}  // namespace ringtrack::eval

@@ -1,0 +1,726 @@
+#include "ringtrack/io/pcd.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <charconv>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+#include <optional>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/io/lzf.hpp"
+#include "ringtrack/io/output_file.hpp"
+#include "ringtrack/io/text.hpp"
+
+namespace ringtrack::io {
+namespace {
+
+// PCL writes binary PCD in the host's byte order, which is little-endian on every platform it
+// runs on in practice; this reader and writer assume the same.
+static_assert(std::endian::native == std::endian::little, "PCD binary I/O assumes little-endian");
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// Organizing more rings than any spinning LiDAR has means the ring field is not a ring index.
+constexpr std::int64_t kMaxRings = 1024;
+
+[[noreturn]] void fail(const std::string& name, const std::string& what) {
+  throw core::InputError(name + ": " + what);
+}
+
+// Quotes a header token for an error message, cut short and with control bytes replaced, so
+// binary garbage cannot produce an unreadable message.
+std::string quoted(std::string_view token) {
+  std::string out = "'";
+  for (char c : token.substr(0, 32)) {
+    out.push_back(c >= 32 && c < 127 ? c : '?');
+  }
+  if (token.size() > 32) out += "...";
+  return out + "'";
+}
+
+std::size_t parse_count(std::string_view token, const std::string& where, std::string_view key,
+                        std::int64_t min_value) {
+  // Bounded so that WIDTH and HEIGHT fit an int and WIDTH * HEIGHT * record size cannot overflow.
+  constexpr std::int64_t kMax = (std::int64_t{1} << 31) - 1;
+  const auto v = parse_int(token);
+  if (!v || *v < min_value || *v > kMax) {
+    fail(where, std::string(key) + " expects an integer in [" + std::to_string(min_value) + ", " +
+                    std::to_string(kMax) + "], got " + quoted(token));
+  }
+  return static_cast<std::size_t>(*v);
+}
+
+std::optional<double> parse_float(std::string_view token) {
+  if (!token.empty() && token.front() == '+') token.remove_prefix(1);
+  float value = 0.0f;
+  const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), value);
+  // Out-of-range magnitudes fall back to double parsing (and become inf when narrowed later).
+  if (ec == std::errc::result_out_of_range) return parse_double(token);
+  if (ec != std::errc() || ptr != token.data() + token.size()) return std::nullopt;
+  return value;
+}
+
+double load(const std::uint8_t* p, char type, int size) {
+  switch (type) {
+    case 'F':
+      if (size == 4) {
+        float v;
+        std::memcpy(&v, p, 4);
+        return v;
+      } else {
+        double v;
+        std::memcpy(&v, p, 8);
+        return v;
+      }
+    case 'U':
+      switch (size) {
+        case 1:
+          return p[0];
+        case 2: {
+          std::uint16_t v;
+          std::memcpy(&v, p, 2);
+          return v;
+        }
+        case 4: {
+          std::uint32_t v;
+          std::memcpy(&v, p, 4);
+          return v;
+        }
+        default: {
+          std::uint64_t v;
+          std::memcpy(&v, p, 8);
+          return static_cast<double>(v);
+        }
+      }
+    default:
+      switch (size) {
+        case 1: {
+          std::int8_t v;
+          std::memcpy(&v, p, 1);
+          return v;
+        }
+        case 2: {
+          std::int16_t v;
+          std::memcpy(&v, p, 2);
+          return v;
+        }
+        case 4: {
+          std::int32_t v;
+          std::memcpy(&v, p, 4);
+          return v;
+        }
+        default: {
+          std::int64_t v;
+          std::memcpy(&v, p, 8);
+          return static_cast<double>(v);
+        }
+      }
+  }
+}
+
+// Strided view of one field's first element across all points, whatever the encoding.
+struct Column {
+  const std::uint8_t* base{nullptr};
+  std::size_t stride{0};
+  char type{'F'};
+  int size{8};
+  [[nodiscard]] double at(std::size_t i) const { return load(base + i * stride, type, size); }
+};
+
+// Decoded data of the fields we use; owns the buffers the columns point into.
+struct Data {
+  std::vector<std::uint8_t> decompressed;
+  std::vector<std::vector<double>> ascii;
+};
+
+Column binary_column(const std::uint8_t* data, const PcdHeader& h, const PcdField& f) {
+  return {data + f.offset, h.point_bytes(), f.type, f.size};
+}
+
+std::vector<Column> load_columns(std::span<const std::uint8_t> bytes, const PcdHeader& h,
+                                 const std::string& name,
+                                 const std::vector<const PcdField*>& wanted, Data& data) {
+  const std::size_t n = h.points();
+  const std::size_t record = h.point_bytes();
+  const std::size_t available = bytes.size() - h.data_offset;
+  std::vector<Column> columns;
+  switch (h.encoding) {
+    case PcdEncoding::kBinary: {
+      if (available / record < n) {
+        fail(name, "truncated binary data: expected " + std::to_string(n) + " points of " +
+                       std::to_string(record) + " bytes (" + std::to_string(n * record) +
+                       " bytes) after the header at offset " + std::to_string(h.data_offset) +
+                       ", found " + std::to_string(available) + " bytes");
+      }
+      for (const auto* f : wanted)
+        columns.push_back(binary_column(bytes.data() + h.data_offset, h, *f));
+      break;
+    }
+    case PcdEncoding::kBinaryCompressed: {
+      if (available < 8) {
+        fail(name, "truncated binary_compressed data: expected the 8-byte size prefix at offset " +
+                       std::to_string(h.data_offset));
+      }
+      std::uint32_t compressed = 0;
+      std::uint32_t uncompressed = 0;
+      std::memcpy(&compressed, bytes.data() + h.data_offset, 4);
+      std::memcpy(&uncompressed, bytes.data() + h.data_offset + 4, 4);
+      if (n > std::numeric_limits<std::uint32_t>::max() / record || uncompressed != n * record) {
+        fail(name, "binary_compressed data declares " + std::to_string(uncompressed) +
+                       " uncompressed bytes, expected " + std::to_string(n) + " points x " +
+                       std::to_string(record) + " bytes = " + std::to_string(n * record));
+      }
+      if (compressed > available - 8) {
+        fail(name, "truncated binary_compressed data: expected " + std::to_string(compressed) +
+                       " compressed bytes at offset " + std::to_string(h.data_offset + 8) +
+                       ", found " + std::to_string(available - 8));
+      }
+      data.decompressed.resize(uncompressed);
+      try {
+        lzf_decompress(bytes.subspan(h.data_offset + 8, compressed), data.decompressed);
+      } catch (const core::InputError& e) {
+        fail(name, std::string("corrupt binary_compressed data (") + e.what() +
+                       ", stream starts at file offset " + std::to_string(h.data_offset + 8) + ")");
+      }
+      // Field-major layout: all points' bytes of field 0, then of field 1, ...
+      for (const auto* f : wanted) {
+        std::size_t start = 0;
+        for (const auto& g : h.fields) {
+          if (&g == f) break;
+          start += n * g.bytes();
+        }
+        columns.push_back({data.decompressed.data() + start, f->bytes(), f->type, f->size});
+      }
+      break;
+    }
+    case PcdEncoding::kAscii: {
+      std::vector<std::size_t> token_of;  // token index of each wanted field
+      std::size_t tokens_per_point = 0;
+      for (const auto* f : wanted) {
+        std::size_t t = 0;
+        for (const auto& g : h.fields) {
+          if (&g == f) break;
+          t += static_cast<std::size_t>(g.count);
+        }
+        token_of.push_back(t);
+      }
+      for (const auto& g : h.fields) tokens_per_point += static_cast<std::size_t>(g.count);
+      // Grown line by line rather than sized from POINTS, so a header claiming billions of points
+      // in a small file cannot exhaust memory; every value needs at least two bytes.
+      data.ascii.assign(wanted.size(), {});
+      for (auto& v : data.ascii) v.reserve(std::min(n, available / (2 * tokens_per_point) + 1));
+      std::size_t point = 0;
+      std::size_t line_no = h.header_lines;
+      std::size_t pos = h.data_offset;
+      while (pos < bytes.size()) {
+        std::size_t end = pos;
+        while (end < bytes.size() && bytes[end] != '\n') ++end;
+        ++line_no;
+        const std::string_view line(reinterpret_cast<const char*>(bytes.data()) + pos, end - pos);
+        pos = end + 1;
+        const auto tokens = split_tokens(line);
+        if (tokens.empty()) continue;
+        const std::string where = "line " + std::to_string(line_no);
+        if (point == n) {
+          fail(name, where + ": more point lines than POINTS/WIDTH*HEIGHT = " + std::to_string(n));
+        }
+        if (tokens.size() != tokens_per_point) {
+          fail(name, where + ": expected " + std::to_string(tokens_per_point) + " values, got " +
+                         std::to_string(tokens.size()));
+        }
+        for (std::size_t k = 0; k < wanted.size(); ++k) {
+          // F4 values straight to float: decimal -> double -> float can round twice.
+          const auto v = wanted[k]->type == 'F' && wanted[k]->size == 4
+                             ? parse_float(tokens[token_of[k]])
+                             : parse_double(tokens[token_of[k]]);
+          if (!v) {
+            fail(name, where + ", field '" + wanted[k]->name + "': expected a number, got " +
+                           quoted(tokens[token_of[k]]));
+          }
+          data.ascii[k].push_back(*v);
+        }
+        ++point;
+      }
+      if (point != n) {
+        fail(name, "truncated ascii data: expected " + std::to_string(n) + " point lines, found " +
+                       std::to_string(point));
+      }
+      for (const auto& v : data.ascii) {
+        columns.push_back(
+            {reinterpret_cast<const std::uint8_t*>(v.data()), sizeof(double), 'F', 8});
+      }
+      break;
+    }
+  }
+  return columns;
+}
+
+// An unsigned integer value of an integer field (labels, rings), or an error naming the point.
+std::uint32_t integral_value(double v, std::uint64_t max, const std::string& name,
+                             const std::string& field, std::size_t point) {
+  if (!(v >= 0.0) || v > static_cast<double>(max) || std::floor(v) != v) {
+    std::string text;
+    append_fixed(text, v, 3);
+    fail(name, "point " + std::to_string(point) + ": " + field + " value " + text +
+                   " is not an integer in [0, " + std::to_string(max) + "]");
+  }
+  return static_cast<std::uint32_t>(v);
+}
+
+bool is_return(double x, double y, double z) {
+  // Drivers mark missing returns with NaN or with the origin; both are no return here.
+  return std::isfinite(x) && std::isfinite(y) && std::isfinite(z) &&
+         (x != 0.0 || y != 0.0 || z != 0.0);
+}
+
+// Decides whether rows must be reversed so that row 0 is the bottom ring, from each row's sum
+// of sin(elevation) over its points.
+bool rows_need_flip(PcdRowOrder order, const std::vector<double>& elevation_sum,
+                    const std::vector<std::size_t>& elevation_count) {
+  if (order == PcdRowOrder::kBottomFirst) return false;
+  if (order == PcdRowOrder::kTopFirst) return true;
+  std::optional<double> first;
+  std::optional<double> last;
+  for (std::size_t r = 0; r < elevation_sum.size(); ++r) {
+    if (elevation_count[r] == 0) continue;
+    const double mean = elevation_sum[r] / static_cast<double>(elevation_count[r]);
+    if (!first) first = mean;
+    last = mean;
+  }
+  return first && last && *first > *last;
+}
+
+double wrap_pi(double a) {
+  a = std::remainder(a, kTwoPi);
+  return a <= -std::numbers::pi ? a + kTwoPi : a;
+}
+
+double wrap_two_pi(double a) {
+  a = std::fmod(a, kTwoPi);
+  return a < 0.0 ? a + kTwoPi : a;
+}
+
+void append_bytes(std::string& out, const void* p, std::size_t n) {
+  out.append(static_cast<const char*>(p), n);
+}
+
+}  // namespace
+
+std::size_t PcdHeader::point_bytes() const {
+  std::size_t total = 0;
+  for (const auto& f : fields) total += f.bytes();
+  return total;
+}
+
+const PcdField* PcdHeader::find(std::string_view name) const {
+  for (const auto& f : fields) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+std::string_view to_string(PcdEncoding encoding) {
+  switch (encoding) {
+    case PcdEncoding::kAscii:
+      return "ascii";
+    case PcdEncoding::kBinary:
+      return "binary";
+    case PcdEncoding::kBinaryCompressed:
+      return "binary_compressed";
+  }
+  return "binary";
+}
+
+PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::string& name) {
+  PcdHeader h;
+  std::vector<std::string_view> names;
+  std::vector<std::string_view> sizes;
+  std::vector<std::string_view> types;
+  std::vector<std::string_view> counts;
+  bool have_width = false;
+  bool have_height = false;
+  bool have_data = false;
+  std::optional<std::size_t> points;
+  std::size_t pos = 0;
+  std::size_t line_no = 0;
+  while (pos < bytes.size() && !have_data) {
+    std::size_t end = pos;
+    while (end < bytes.size() && bytes[end] != '\n') ++end;
+    const std::string_view line(reinterpret_cast<const char*>(bytes.data()) + pos, end - pos);
+    pos = std::min(end + 1, bytes.size());
+    ++line_no;
+    const auto tokens = split_tokens(line);
+    if (tokens.empty() || tokens.front().front() == '#') continue;
+    const std::string where = name + ": header line " + std::to_string(line_no);
+    const std::string_view key = tokens.front();
+    const std::vector<std::string_view> rest(tokens.begin() + 1, tokens.end());
+    if (key == "VERSION") {
+      // 0.7 is the current version; older files with the same keywords read the same way.
+    } else if (key == "FIELDS" || key == "COLUMNS") {
+      names = rest;
+    } else if (key == "SIZE") {
+      sizes = rest;
+    } else if (key == "TYPE") {
+      types = rest;
+    } else if (key == "COUNT") {
+      counts = rest;
+    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+      if (rest.size() != 1) fail(where, std::string(key) + " expects one integer");
+      const std::size_t v = parse_count(rest[0], where, key, key == "POINTS" ? 0 : 1);
+      if (key == "WIDTH") {
+        h.width = v;
+        have_width = true;
+      } else if (key == "HEIGHT") {
+        h.height = v;
+        have_height = true;
+      } else {
+        points = v;
+      }
+    } else if (key == "VIEWPOINT") {
+      if (rest.size() != 7) fail(where, "VIEWPOINT expects 7 numbers (tx ty tz qw qx qy qz)");
+    } else if (key == "DATA") {
+      if (rest.size() != 1) fail(where, "DATA expects one of ascii, binary, binary_compressed");
+      if (rest[0] == "ascii") {
+        h.encoding = PcdEncoding::kAscii;
+      } else if (rest[0] == "binary") {
+        h.encoding = PcdEncoding::kBinary;
+      } else if (rest[0] == "binary_compressed") {
+        h.encoding = PcdEncoding::kBinaryCompressed;
+      } else {
+        fail(where,
+             "unknown DATA " + quoted(rest[0]) + " (expected ascii, binary or binary_compressed)");
+      }
+      have_data = true;
+      h.data_offset = pos;
+      h.header_lines = line_no;
+    } else {
+      fail(where, "unknown header keyword " + quoted(key) + " (not a PCD v0.7 file?)");
+    }
+  }
+  if (!have_data) fail(name, "no DATA line: not a PCD file, or its header is truncated");
+  if (names.empty()) fail(name, "header has no FIELDS");
+  if (sizes.size() != names.size()) {
+    fail(name, "SIZE lists " + std::to_string(sizes.size()) + " values for " +
+                   std::to_string(names.size()) + " FIELDS");
+  }
+  if (types.size() != names.size()) {
+    fail(name, "TYPE lists " + std::to_string(types.size()) + " values for " +
+                   std::to_string(names.size()) + " FIELDS");
+  }
+  if (!counts.empty() && counts.size() != names.size()) {
+    fail(name, "COUNT lists " + std::to_string(counts.size()) + " values for " +
+                   std::to_string(names.size()) + " FIELDS");
+  }
+  if (!have_width) fail(name, "header has no WIDTH");
+  if (!have_height) fail(name, "header has no HEIGHT");
+  if (points && *points != h.width * h.height) {
+    fail(name, "POINTS " + std::to_string(*points) + " does not equal WIDTH * HEIGHT = " +
+                   std::to_string(h.width) + " * " + std::to_string(h.height));
+  }
+  std::size_t offset = 0;
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    PcdField f;
+    f.name = std::string(names[k]);
+    const std::string what = "field '" + f.name + "'";
+    if (types[k].size() != 1 || (types[k][0] != 'F' && types[k][0] != 'U' && types[k][0] != 'I')) {
+      fail(name, what + ": unknown TYPE " + quoted(types[k]) + " (expected F, U or I)");
+    }
+    f.type = types[k][0];
+    const auto size = parse_int(sizes[k]);
+    const bool size_ok =
+        size && (*size == 4 || *size == 8 || (f.type != 'F' && (*size == 1 || *size == 2)));
+    if (!size_ok) {
+      fail(name, what + ": unsupported SIZE " + quoted(sizes[k]) + " for TYPE " + f.type +
+                     " (expected F4, F8, U1/U2/U4/U8 or I1/I2/I4/I8)");
+    }
+    f.size = static_cast<int>(*size);
+    if (!counts.empty()) {
+      const auto count = parse_int(counts[k]);
+      if (!count || *count < 1 || *count > 65536) {
+        fail(name, what + ": COUNT " + quoted(counts[k]) + " is not an integer in [1, 65536]");
+      }
+      f.count = static_cast<int>(*count);
+    }
+    f.offset = offset;
+    offset += f.bytes();
+    h.fields.push_back(std::move(f));
+  }
+  return h;
+}
+
+PcdScan decode_pcd(std::span<const std::uint8_t> bytes, const std::string& name,
+                   const PcdReadOptions& options) {
+  const PcdHeader h = parse_pcd_header(bytes, name);
+  std::string field_list;
+  for (const auto& f : h.fields) field_list += (field_list.empty() ? "" : " ") + f.name;
+  const auto require = [&](const char* field) {
+    const PcdField* f = h.find(field);
+    if (f == nullptr) {
+      fail(name, std::string("missing field '") + field +
+                     "' (expected fields x y z, optionally intensity and label; found " +
+                     field_list + ")");
+    }
+    return f;
+  };
+  const auto single = [&](const PcdField* f) {
+    if (f != nullptr && f->count != 1) {
+      fail(name, "field '" + f->name + "' has COUNT " + std::to_string(f->count) + ", expected 1");
+    }
+    return f;
+  };
+  const PcdField* fx = single(require("x"));
+  const PcdField* fy = single(require("y"));
+  const PcdField* fz = single(require("z"));
+  const PcdField* fi = single(h.find("intensity"));
+  const PcdField* fl = single(h.find("label"));
+  if (fl != nullptr && fl->type == 'F') {
+    fail(name, "field 'label' has TYPE F, expected an integer type (U or I)");
+  }
+  const bool organized = h.height > 1;
+  const PcdField* fr = nullptr;
+  if (!organized) {
+    if (options.organize_columns <= 0) {
+      fail(name, "unorganized cloud (HEIGHT 1, WIDTH " + std::to_string(h.width) +
+                     "): expected an organized cloud with HEIGHT = rings and WIDTH = columns");
+    }
+    fr = single(h.find(options.ring_field));
+    if (fr == nullptr) {
+      fail(name, "unorganized cloud (HEIGHT 1) without a '" + options.ring_field +
+                     "' field: cannot organize it by ring (found " + field_list + ")");
+    }
+  }
+  std::vector<const PcdField*> wanted{fx, fy, fz};
+  if (fi != nullptr) wanted.push_back(fi);
+  if (fl != nullptr) wanted.push_back(fl);
+  if (fr != nullptr) wanted.push_back(fr);
+  Data data;
+  const auto columns = load_columns(bytes, h, name, wanted, data);
+  const Column& cx = columns[0];
+  const Column& cy = columns[1];
+  const Column& cz = columns[2];
+  std::size_t next = 3;
+  const Column* ci = fi != nullptr ? &columns[next++] : nullptr;
+  const Column* cl = fl != nullptr ? &columns[next++] : nullptr;
+  const Column* cr = fr != nullptr ? &columns[next++] : nullptr;
+
+  const std::size_t n = h.points();
+  PcdScan out;
+  // Row (file row for organized clouds, ring value otherwise) of each point and its elevation,
+  // to decide the row order before filling the scan.
+  std::vector<std::uint32_t> row(n);
+  std::size_t rows = h.height;
+  if (organized) {
+    for (std::size_t i = 0; i < n; ++i) row[i] = static_cast<std::uint32_t>(i / h.width);
+  } else {
+    std::uint32_t max_ring = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+      row[i] = integral_value(cr->at(i), kMaxRings - 1, name, "'" + fr->name + "'", i);
+      max_ring = std::max(max_ring, row[i]);
+    }
+    rows = options.organize_rings > 0 ? static_cast<std::size_t>(options.organize_rings)
+                                      : std::size_t{max_ring} + 1;
+    if (max_ring >= rows) {
+      fail(name, "ring value " + std::to_string(max_ring) + " is outside [0, " +
+                     std::to_string(rows) + ") rings");
+    }
+  }
+  std::vector<double> elevation_sum(rows, 0.0);
+  std::vector<std::size_t> elevation_count(rows, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = cx.at(i);
+    const double y = cy.at(i);
+    const double z = cz.at(i);
+    if (!is_return(x, y, z)) continue;
+    // sin(elevation) orders rows like the elevation itself, without an atan2 per point.
+    elevation_sum[row[i]] += z / std::sqrt(x * x + y * y + z * z);
+    ++elevation_count[row[i]];
+  }
+  out.rows_flipped = rows_need_flip(options.row_order, elevation_sum, elevation_count);
+  const auto ring_of_row = [&](std::size_t r) {
+    return static_cast<int>(out.rows_flipped ? rows - 1 - r : r);
+  };
+
+  const int columns_out = organized ? static_cast<int>(h.width) : options.organize_columns;
+  out.scan = core::OrganizedScan(static_cast<int>(rows), columns_out);
+  if (cl != nullptr) out.labels.assign(out.scan.size(), 0);
+  const double step = kTwoPi / columns_out;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double x = cx.at(i);
+    const double y = cy.at(i);
+    const double z = cz.at(i);
+    const int ring = ring_of_row(row[i]);
+    const bool hit = is_return(x, y, z);
+    int column = 0;
+    if (organized) {
+      column = static_cast<int>(i % h.width);
+    } else {
+      if (!hit) continue;  // an unorganized cloud's missing returns carry no cell
+      column = std::min(columns_out - 1, static_cast<int>(wrap_two_pi(std::atan2(y, x)) / step));
+    }
+    const std::size_t cell = out.scan.index(ring, column);
+    const Eigen::Vector3f p(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+    const auto range = static_cast<float>(std::sqrt(x * x + y * y + z * z));
+    if (!organized && out.scan.valid(cell)) {
+      // Dual returns and azimuth jitter put two points in one cell: keep the nearer one.
+      ++out.dropped_points;
+      if (out.scan.range_m(cell) <= range) continue;
+    }
+    if (hit) {
+      double intensity = ci != nullptr ? ci->at(i) : 0.0;
+      if (!std::isfinite(intensity)) intensity = 0.0;
+      out.scan.set_return(ring, column, range, static_cast<float>(intensity), p);
+    } else {
+      out.scan.set_invalid(ring, column, core::ReturnStatus::kNoReturn);
+    }
+    if (cl != nullptr) {
+      out.labels[cell] =
+          integral_value(cl->at(i), std::numeric_limits<std::uint32_t>::max(), name, "label", i);
+    }
+  }
+  if (organized) {
+    estimate_column_azimuths(out.scan);
+  } else {
+    for (int c = 0; c < columns_out; ++c) {
+      out.scan.column_azimuth_rad[static_cast<std::size_t>(c)] = (c + 0.5) * step;
+    }
+  }
+  return out;
+}
+
+PcdScan read_pcd(const std::filesystem::path& path, const PcdReadOptions& options) {
+  const auto bytes = read_file_bytes(path);
+  return decode_pcd(bytes, path.string(), options);
+}
+
+void estimate_column_azimuths(core::OrganizedScan& scan) {
+  const auto columns = static_cast<std::size_t>(scan.columns());
+  const double step = kTwoPi / static_cast<double>(columns);
+  std::vector<double> sum_cos(columns, 0.0);
+  std::vector<double> sum_sin(columns, 0.0);
+  std::vector<bool> known(columns, false);
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!scan.valid(i)) continue;
+    const double x = scan.xs()[i];
+    const double y = scan.ys()[i];
+    if (x == 0.0 && y == 0.0) continue;
+    const auto c = static_cast<std::size_t>(scan.column_of(i));
+    // Points of one column share their azimuth, so the vector sum (weighted by horizontal
+    // distance) points the same way as the mean of unit vectors, without a division per point.
+    sum_cos[c] += x;
+    sum_sin[c] += y;
+    known[c] = true;
+  }
+  auto& az = scan.column_azimuth_rad;
+  std::vector<std::size_t> ks;
+  for (std::size_t c = 0; c < columns; ++c) {
+    if (known[c]) {
+      az[c] = wrap_two_pi(std::atan2(sum_sin[c], sum_cos[c]));
+      ks.push_back(c);
+    }
+  }
+  if (ks.empty()) {
+    for (std::size_t c = 0; c < columns; ++c) az[c] = static_cast<double>(c) * step;
+    return;
+  }
+  // Direction of the column order (counter-clockwise or clockwise) by majority of neighbours.
+  int votes = 0;
+  for (std::size_t j = 0; j + 1 < ks.size(); ++j) {
+    const double d = wrap_pi(az[ks[j + 1]] - az[ks[j]]);
+    votes += d > 0 ? 1 : (d < 0 ? -1 : 0);
+  }
+  const double sign = votes >= 0 ? 1.0 : -1.0;
+  for (std::size_t j = 0; j < ks.size(); ++j) {
+    const std::size_t a = ks[j];
+    const std::size_t b = j + 1 < ks.size() ? ks[j + 1] : ks[0] + columns;
+    const std::size_t gap = b - a;
+    if (gap <= 1) continue;
+    // Of the turns that reach b's azimuth, take the one closest to uniform steps.
+    double d = wrap_pi(az[b % columns] - az[a]);
+    const double expected = sign * static_cast<double>(gap) * step;
+    d += kTwoPi * std::round((expected - d) / kTwoPi);
+    for (std::size_t m = 1; m < gap; ++m) {
+      az[(a + m) % columns] =
+          wrap_two_pi(az[a] + d * static_cast<double>(m) / static_cast<double>(gap));
+    }
+  }
+}
+
+std::string encode_pcd(const core::OrganizedScan& scan, std::span<const std::uint32_t> labels,
+                       PcdEncoding encoding) {
+  const std::size_t n = scan.size();
+  if (!labels.empty() && labels.size() != n) {
+    throw core::Error("encode_pcd: " + std::to_string(labels.size()) + " labels for " +
+                      std::to_string(n) + " cells");
+  }
+  if (n == 0) throw core::Error("encode_pcd: the scan is empty");
+  const bool with_labels = !labels.empty();
+  std::string out;
+  out += "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n";
+  out += with_labels
+             ? "FIELDS x y z intensity label\nSIZE 4 4 4 4 4\nTYPE F F F F U\nCOUNT 1 1 1 1 1\n"
+             : "FIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n";
+  out += "WIDTH " + std::to_string(scan.columns()) + "\nHEIGHT " + std::to_string(scan.rings()) +
+         "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA " +
+         std::string(to_string(encoding)) + "\n";
+  const auto& xs = scan.xs();
+  const auto& ys = scan.ys();
+  const auto& zs = scan.zs();
+  const auto& is = scan.intensities();
+  switch (encoding) {
+    case PcdEncoding::kAscii:
+      for (std::size_t i = 0; i < n; ++i) {
+        append_shortest(out, xs[i]);
+        out += ' ';
+        append_shortest(out, ys[i]);
+        out += ' ';
+        append_shortest(out, zs[i]);
+        out += ' ';
+        append_shortest(out, is[i]);
+        if (with_labels) {
+          out += ' ';
+          out += std::to_string(labels[i]);
+        }
+        out += '\n';
+      }
+      break;
+    case PcdEncoding::kBinary:
+      out.reserve(out.size() + n * (with_labels ? 20 : 16));
+      for (std::size_t i = 0; i < n; ++i) {
+        append_bytes(out, &xs[i], 4);
+        append_bytes(out, &ys[i], 4);
+        append_bytes(out, &zs[i], 4);
+        append_bytes(out, &is[i], 4);
+        if (with_labels) append_bytes(out, &labels[i], 4);
+      }
+      break;
+    case PcdEncoding::kBinaryCompressed: {
+      std::vector<std::uint8_t> raw(n * (with_labels ? 20 : 16));
+      std::memcpy(raw.data(), xs.data(), 4 * n);
+      std::memcpy(raw.data() + 4 * n, ys.data(), 4 * n);
+      std::memcpy(raw.data() + 8 * n, zs.data(), 4 * n);
+      std::memcpy(raw.data() + 12 * n, is.data(), 4 * n);
+      if (with_labels) std::memcpy(raw.data() + 16 * n, labels.data(), 4 * n);
+      const auto packed = lzf_compress(raw);
+      if (raw.size() > std::numeric_limits<std::uint32_t>::max() ||
+          packed.size() > std::numeric_limits<std::uint32_t>::max()) {
+        throw core::Error("encode_pcd: binary_compressed data exceeds 4 GiB");
+      }
+      const auto compressed = static_cast<std::uint32_t>(packed.size());
+      const auto uncompressed = static_cast<std::uint32_t>(raw.size());
+      append_bytes(out, &compressed, 4);
+      append_bytes(out, &uncompressed, 4);
+      append_bytes(out, packed.data(), packed.size());
+      break;
+    }
+  }
+  return out;
+}
+
+void write_pcd(const std::filesystem::path& path, const core::OrganizedScan& scan,
+               std::span<const std::uint32_t> labels, PcdEncoding encoding) {
+  write_file(path, encode_pcd(scan, labels, encoding));
+}
+
+}  // namespace ringtrack::io

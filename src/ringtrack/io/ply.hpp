@@ -1,0 +1,27 @@
+#pragma once
+/// PLY point-cloud writer (x y z intensity), for the static map.
+
+#include <Eigen/Core>
+#include <filesystem>
+#include <span>
+#include <string>
+
+namespace ringtrack::io {
+
+/// How write_ply stores the vertices.
+enum class PlyEncoding {
+  kBinaryLittleEndian,  ///< "format binary_little_endian 1.0": 16 bytes per point
+  kAscii,               ///< "format ascii 1.0": one line per point
+};
+
+/// Encodes points as a PLY file with one vertex element of float properties x y z intensity.
+/// intensities must be empty (all 0) or hold one value per point; throws core::Error otherwise.
+std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const float> intensities,
+                       PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian);
+
+/// Writes encode_ply's bytes to a file; I/O failures throw core::Error and remove the partial file.
+void write_ply(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
+               std::span<const float> intensities,
+               PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian);
+
+}  // namespace ringtrack::io

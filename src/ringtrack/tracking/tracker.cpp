@@ -1,0 +1,316 @@
+#include "ringtrack/tracking/tracker.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/tracking/assignment.hpp"
+#include "ringtrack/tracking/association_cost.hpp"
+
+namespace ringtrack::tracking {
+namespace {
+
+constexpr double kKmhToMps = 1.0 / 3.6;
+// Floor on the eigenvalues of the measurement noise: a detection whose points lie on a line or
+// plane (one ring, one column) would otherwise have a singular covariance.
+constexpr double kMinMeasurementVariance = 0.01 * 0.01;
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+double max_eigenvalue(const Eigen::Matrix3d& m) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(m, Eigen::EigenvaluesOnly);
+  return solver.eigenvalues().maxCoeff();
+}
+
+bool footprints_intersect(const core::Box3& a, const core::Box3& b) {
+  if (a.empty() || b.empty()) return true;  // nothing to compare: no evidence of motion
+  return a.min.x() <= b.max.x() && b.min.x() <= a.max.x() && a.min.y() <= b.max.y() &&
+         b.min.y() <= a.max.y();
+}
+
+// Vertical distance between two boxes' height ranges (0 when they overlap or one is empty).
+double vertical_gap(const core::Box3& a, const core::Box3& b) {
+  if (a.empty() || b.empty()) return 0.0;
+  return std::max(
+      0.0, static_cast<double>(std::max(a.min.z(), b.min.z()) - std::min(a.max.z(), b.max.z())));
+}
+
+Eigen::Matrix3d floored_covariance(const Eigen::Matrix3f& c, double scale) {
+  Eigen::Matrix3d r = c.cast<double>();
+  r = 0.5 * scale * (r + r.transpose()).eval();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(r);
+  const Eigen::Vector3d values = solver.eigenvalues().cwiseMax(kMinMeasurementVariance);
+  return solver.eigenvectors() * values.asDiagonal() * solver.eigenvectors().transpose();
+}
+
+// Cost of one pair under the configured rule from precomputed terms; +inf when a cheap lower
+// bound already exceeds the gate. Lower bounds: for Bhattacharyya the log term is >= 0 (log det
+// is concave) and m^T S^-1 m >= |m|^2 / trace(S); likewise for Mahalanobis.
+double pair_cost_terms(const core::TrackingConfig& config, double gate, const GaussianTerm& h,
+                       const GaussianTerm& d) {
+  const Eigen::Vector3d m = h.mean - d.mean;
+  const double m2 = m.squaredNorm();
+  switch (config.cost) {
+    case core::AssociationCost::kBhattacharyya:
+      if (m2 > 4.0 * gate * (h.max_eig_bound + d.max_eig_bound)) return kInf;
+      return bhattacharyya_distance(h, d);
+    case core::AssociationCost::kMahalanobis: {
+      if (m2 > gate * gate * (h.max_eig_bound + d.max_eig_bound)) return kInf;
+      return std::sqrt(m.dot((h.covariance + d.covariance).inverse() * m));
+    }
+    case core::AssociationCost::kEuclidean:
+      return std::sqrt(m2);
+  }
+  return kInf;
+}
+
+}  // namespace
+
+Tracker::Tracker(const core::TrackingConfig& config)
+    : config_(config),
+      min_speed_mps_(config.min_speed_kmh * kKmhToMps),
+      max_speed_mps_(config.max_speed_kmh * kKmhToMps) {}
+
+void Tracker::reset() {
+  hypotheses_.clear();
+  started_ = false;
+  stats_ = {};
+}
+
+double Tracker::gate() const {
+  switch (config_.cost) {
+    case core::AssociationCost::kBhattacharyya:
+      return config_.gate_bhattacharyya;
+    case core::AssociationCost::kMahalanobis:
+      return config_.gate_mahalanobis;
+    case core::AssociationCost::kEuclidean:
+      return config_.gate_euclidean_m;
+  }
+  return config_.gate_bhattacharyya;
+}
+
+Eigen::Matrix3d Tracker::measurement_covariance(const core::Detection& detection) const {
+  return floored_covariance(detection.covariance, config_.measurement_covariance_scale);
+}
+
+double Tracker::pair_cost(const Hypothesis& hypothesis, const core::Detection& detection) const {
+  return pair_cost_terms(
+      config_, gate(), make_gaussian_term(hypothesis.position(), hypothesis.position_covariance()),
+      make_gaussian_term(detection.centroid.cast<double>(), measurement_covariance(detection)));
+}
+
+std::vector<Eigen::Vector3f> Tracker::predicted_positions(std::int64_t stamp_ns) const {
+  const double dt =
+      started_ && stamp_ns > stamp_ns_ ? static_cast<double>(stamp_ns - stamp_ns_) * 1e-9 : 0.0;
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(hypotheses_.size());
+  for (const auto& h : hypotheses_) {
+    out.push_back((h.filter.position() + dt * h.filter.velocity()).cast<float>());
+  }
+  return out;
+}
+
+const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection>& detections,
+                                               std::int64_t stamp_ns) {
+  if (started_ && stamp_ns < stamp_ns_) {
+    throw core::InputError("tracking: scan stamp " + std::to_string(stamp_ns) +
+                           " ns precedes the previous scan's " + std::to_string(stamp_ns_) + " ns");
+  }
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    if (!detections[i].centroid.allFinite() || !detections[i].covariance.allFinite()) {
+      throw core::InputError("tracking: detection " + std::to_string(i) + " of the scan at " +
+                             std::to_string(stamp_ns) +
+                             " ns has a non-finite centroid or covariance");
+    }
+  }
+  const double dt = started_ ? static_cast<double>(stamp_ns - stamp_ns_) * 1e-9 : 0.0;
+  started_ = true;
+  stamp_ns_ = stamp_ns;
+  stats_ = {};
+
+  measurement_r_.clear();
+  for (const auto& d : detections) measurement_r_.push_back(measurement_covariance(d));
+  predict_all(dt);
+  assign(detections);
+  detection_used_.assign(detections.size(), 0);
+  for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
+    const int d = col_of_row_[i];
+    if (d == kUnassigned) {
+      coast(hypotheses_[i]);
+    } else {
+      correct(hypotheses_[i], detections[d], d);
+      detection_used_[d] = 1;
+      ++stats_.assigned;
+    }
+  }
+  delete_uncertain();
+  for (std::size_t j = 0; j < detections.size(); ++j) {
+    if (detection_used_[j]) continue;
+    if (detections[j].relaxed) {
+      ++stats_.relaxed_unassigned;  // relaxed detections only confirm existing tracks
+      continue;
+    }
+    create(detections[j], static_cast<int>(j));
+  }
+  delete_merged();
+  for (auto& h : hypotheses_) {
+    report_velocity(h);
+    classify(h);
+  }
+  return hypotheses_;
+}
+
+void Tracker::predict_all(double dt_s) {
+  for (auto& h : hypotheses_) {
+    const Eigen::Vector3d before = h.filter.position();
+    h.filter.predict(dt_s, config_.process_noise);
+    // A missed object's box follows the prediction; a corrected one is replaced below.
+    h.box = h.box.translated((h.filter.position() - before).cast<float>());
+    ++h.age_scans;
+    h.detection = -1;
+    h.points = 0;
+  }
+}
+
+void Tracker::assign(const std::vector<core::Detection>& detections) {
+  const auto rows = static_cast<Eigen::Index>(hypotheses_.size());
+  const auto cols = static_cast<Eigen::Index>(detections.size());
+  col_of_row_.assign(hypotheses_.size(), kUnassigned);
+  if (rows == 0 || cols == 0) return;
+  h_terms_.clear();
+  d_terms_.clear();
+  for (const auto& h : hypotheses_) {
+    h_terms_.push_back(make_gaussian_term(h.position(), h.position_covariance()));
+  }
+  for (std::size_t j = 0; j < detections.size(); ++j) {
+    d_terms_.push_back(
+        make_gaussian_term(detections[j].centroid.cast<double>(), measurement_r_[j]));
+  }
+  const double g = gate();
+  cost_.resize(rows, cols);
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    for (Eigen::Index j = 0; j < cols; ++j) {
+      cost_(i, j) = pair_cost_terms(config_, g, h_terms_[i], d_terms_[j]);
+    }
+  }
+  col_of_row_ = solve_gated_assignment(cost_, g);
+}
+
+void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
+  h.filter.update(d.centroid.cast<double>(), measurement_r_[index]);
+  h.filter.cap_speed(max_speed_mps_);
+  h.box = d.box;
+  h.missed_scans = 0;
+  h.points = d.indices.size();
+  h.detection = index;
+  h.last_detection = {d.centroid, d.covariance, d.box, d.indices.size(), d.relaxed, stamp_ns_};
+}
+
+void Tracker::coast(Hypothesis& h) {
+  ++h.missed_scans;
+}
+
+void Tracker::create(const core::Detection& d, int index) {
+  Hypothesis h;
+  h.id = next_id_++;
+  h.filter = ConstantVelocityKalman(d.centroid.cast<double>(), measurement_r_[index],
+                                    config_.initial_velocity_stddev_mps);
+  h.box = h.initial_box = h.anchor_box = d.box;
+  h.anchor_position = h.filter.position();
+  h.age_scans = 1;
+  h.points = d.indices.size();
+  h.detection = index;
+  h.last_detection = {d.centroid, d.covariance, d.box, d.indices.size(), d.relaxed, stamp_ns_};
+  hypotheses_.push_back(std::move(h));
+  ++stats_.created;
+}
+
+void Tracker::delete_uncertain() {
+  const auto before = hypotheses_.size();
+  std::erase_if(hypotheses_, [&](const Hypothesis& h) {
+    return max_eigenvalue(h.position_covariance()) > config_.delete_eigenvalue_m2;
+  });
+  stats_.deleted_uncertain = static_cast<int>(before - hypotheses_.size());
+}
+
+void Tracker::delete_merged() {
+  // hypotheses_ is in creation order, so a later entry is the younger one.
+  const double r = config_.merge_distance_m;
+  if (r <= 0.0) return;
+  std::vector<char> doomed(hypotheses_.size(), 0);
+  for (std::size_t j = 1; j < hypotheses_.size(); ++j) {
+    const auto& young = hypotheses_[j];
+    for (std::size_t i = 0; i < j; ++i) {
+      if (doomed[i]) continue;
+      const auto& old = hypotheses_[i];
+      const double horizontal = (young.position() - old.position()).head<2>().norm();
+      if (horizontal < r && vertical_gap(young.box, old.box) < r) {
+        doomed[j] = 1;
+        break;
+      }
+    }
+  }
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < hypotheses_.size(); ++j) {
+    if (doomed[j]) {
+      ++stats_.deleted_merged;
+    } else {
+      if (k != j) hypotheses_[k] = std::move(hypotheses_[j]);
+      ++k;
+    }
+  }
+  hypotheses_.resize(k);
+}
+
+void Tracker::report_velocity(Hypothesis& h) const {
+  const Eigen::Vector3d v = h.filter.velocity();
+  const double speed = v.norm();
+  if (speed <= min_speed_mps_) {
+    h.velocity_mps.setZero();
+  } else if (speed > max_speed_mps_) {
+    h.velocity_mps = v * (max_speed_mps_ / speed);
+  } else {
+    h.velocity_mps = v;
+  }
+}
+
+void Tracker::classify(Hypothesis& h) const {
+  if (h.detection < 0) return;  // only a measured box is evidence either way
+  if (!h.dynamic) {
+    const double moved = (h.position() - h.anchor_position).head<2>().norm();
+    if (!footprints_intersect(h.box, h.anchor_box) && moved > config_.dynamic_min_distance_m) {
+      h.dynamic = h.ever_dynamic = true;
+      h.rest_scans = 0;
+    }
+    return;
+  }
+  h.rest_scans = h.velocity_mps.isZero() ? h.rest_scans + 1 : 0;
+  if (config_.rest_scans_to_static > 0 && h.rest_scans >= config_.rest_scans_to_static) {
+    h.dynamic = false;
+    h.anchor_box = h.box;
+    h.anchor_position = h.position();
+    h.rest_scans = 0;
+  }
+}
+
+int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r,
+                                double dt_s, int updates) {
+  ConstantVelocityKalman filter(Eigen::Vector3d::Zero(), r, config.initial_velocity_stddev_mps);
+  for (int u = 0; u < updates; ++u) {
+    filter.predict(dt_s, config.process_noise);
+    filter.update(Eigen::Vector3d::Zero(), r);
+  }
+  constexpr int kLimit = 1000000;
+  for (int missed = 1; missed <= kLimit; ++missed) {
+    filter.predict(dt_s, config.process_noise);
+    if (max_eigenvalue(filter.position_covariance()) > config.delete_eigenvalue_m2) return missed;
+  }
+  return kLimit;
+}
+
+}  // namespace ringtrack::tracking

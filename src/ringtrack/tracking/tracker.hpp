@@ -1,0 +1,129 @@
+#pragma once
+/// Multi-object tracker (paper III.D): one constant-velocity Kalman filter and box per object,
+/// Hungarian assignment on a gated cost, hypothesis lifecycle and static/dynamic classification.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "ringtrack/core/box3.hpp"
+#include "ringtrack/core/config.hpp"
+#include "ringtrack/core/detection.hpp"
+#include "ringtrack/tracking/association_cost.hpp"
+#include "ringtrack/tracking/kalman.hpp"
+
+namespace ringtrack::tracking {
+
+/// What a hypothesis keeps of the last detection assigned to it.
+struct DetectionSummary {
+  Eigen::Vector3f centroid{Eigen::Vector3f::Zero()};        ///< world frame
+  Eigen::Matrix3f covariance{Eigen::Matrix3f::Identity()};  ///< as the detector gave it
+  core::Box3 box;                                           ///< world frame
+  std::size_t points{0};                                    ///< number of grid cells
+  bool relaxed{false};                                      ///< from the relaxed object model
+  std::int64_t stamp_ns{0};                                 ///< scan it came from
+};
+
+/// One tracked object.
+struct Hypothesis {
+  std::uint64_t id{0};            ///< unique, from 1, never reused
+  ConstantVelocityKalman filter;  ///< world-frame position and velocity with covariance
+  Eigen::Vector3d velocity_mps{Eigen::Vector3d::Zero()};  ///< reported: 0 up to min speed, capped
+  core::Box3 box;          ///< current box: the assigned detection's, else the last one moved
+                           ///< along the prediction
+  core::Box3 initial_box;  ///< box of the detection that created the hypothesis
+  core::Box3 anchor_box;   ///< box the static/dynamic test compares with (initial, or where a
+                           ///< dynamic hypothesis came to rest)
+  Eigen::Vector3d anchor_position{Eigen::Vector3d::Zero()};  ///< position when anchored
+  bool dynamic{false};              ///< moving away from its anchor (see docs/tracking.md)
+  bool ever_dynamic{false};         ///< has been dynamic at least once
+  int age_scans{0};                 ///< scans since creation, 1 in the creating scan
+  int missed_scans{0};              ///< consecutive scans without an assigned detection
+  int rest_scans{0};                ///< consecutive scans with reported speed zero
+  std::size_t points{0};            ///< points of the assigned detection this scan, 0 when missed
+  int detection{-1};                ///< index of the detection assigned this scan, -1 when none
+  DetectionSummary last_detection;  ///< the most recent assigned detection
+
+  /// Position estimate (world, m).
+  [[nodiscard]] Eigen::Vector3d position() const { return filter.position(); }
+  /// Covariance of the position estimate (m^2).
+  [[nodiscard]] Eigen::Matrix3d position_covariance() const { return filter.position_covariance(); }
+};
+
+/// Counters of the last update, for logs and tests.
+struct TrackerStats {
+  int assigned{0};            ///< detections paired with hypotheses
+  int created{0};             ///< new hypotheses
+  int deleted_uncertain{0};   ///< deleted for a too large position covariance
+  int deleted_merged{0};      ///< younger hypotheses deleted near older ones
+  int relaxed_unassigned{0};  ///< relaxed detections that paired with nothing (no new track)
+};
+
+/// Tracks objects from the detections of successive scans.
+class Tracker {
+ public:
+  /// Checks nothing: the config comes validated from core::validate_config.
+  explicit Tracker(const core::TrackingConfig& config);
+
+  /// Predicts every hypothesis to stamp_ns, assigns the detections (world frame), corrects,
+  /// creates, deletes and classifies hypotheses. Stamps must not decrease (throws
+  /// core::InputError); the first call or an equal stamp predicts nothing. Throws
+  /// core::InputError for a detection with a non-finite centroid or covariance.
+  const std::vector<Hypothesis>& update(const std::vector<core::Detection>& detections,
+                                        std::int64_t stamp_ns);
+
+  /// Current hypotheses, oldest first; Hypothesis::detection indexes the last update's input.
+  [[nodiscard]] const std::vector<Hypothesis>& hypotheses() const { return hypotheses_; }
+  /// Positions of every hypothesis predicted to stamp_ns (world frame), e.g. for the
+  /// detector's relaxed object model in the next scan.
+  [[nodiscard]] std::vector<Eigen::Vector3f> predicted_positions(std::int64_t stamp_ns) const;
+  /// Counters of the last update.
+  [[nodiscard]] const TrackerStats& stats() const { return stats_; }
+  /// Stamp of the last update (ns); meaningless before the first.
+  [[nodiscard]] std::int64_t stamp_ns() const { return stamp_ns_; }
+  /// Forgets every hypothesis and the time (ids keep counting).
+  void reset();
+
+  /// The cost of pairing a hypothesis with a detection under the configured cost, or +inf
+  /// when a cheap lower bound already exceeds the gate.
+  [[nodiscard]] double pair_cost(const Hypothesis& hypothesis,
+                                 const core::Detection& detection) const;
+  /// The gate of the configured cost.
+  [[nodiscard]] double gate() const;
+  /// Measurement noise the filter uses for a detection (scaled covariance, symmetric, floored).
+  [[nodiscard]] Eigen::Matrix3d measurement_covariance(const core::Detection& detection) const;
+
+ private:
+  void predict_all(double dt_s);
+  void assign(const std::vector<core::Detection>& detections);
+  void correct(Hypothesis& h, const core::Detection& d, int index);
+  void coast(Hypothesis& h);
+  void create(const core::Detection& d, int index);
+  void delete_uncertain();
+  void delete_merged();
+  void classify(Hypothesis& h) const;
+  void report_velocity(Hypothesis& h) const;
+
+  core::TrackingConfig config_;
+  double min_speed_mps_;
+  double max_speed_mps_;
+  std::vector<Hypothesis> hypotheses_;
+  std::vector<Eigen::Matrix3d> measurement_r_;  // per detection of the current update
+  std::vector<GaussianTerm> h_terms_, d_terms_;
+  std::vector<int> col_of_row_;
+  std::vector<char> detection_used_;
+  Eigen::MatrixXd cost_;
+  std::uint64_t next_id_{1};
+  std::int64_t stamp_ns_{0};
+  bool started_{false};
+  TrackerStats stats_;
+};
+
+/// Scans a hypothesis created from one detection with covariance r survives without further
+/// detections at scan period dt_s when it had `updates` more detections one period apart, by
+/// running the filter alone: the number of predictions after the last update until the largest
+/// position-covariance eigenvalue exceeds delete_eigenvalue_m2 (the deletion scan counts).
+int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r,
+                                double dt_s, int updates);
+
+}  // namespace ringtrack::tracking

@@ -1,0 +1,21 @@
+#pragma once
+// Runs a shell command for CLI tests and captures its exit code, stdout and stderr.
+
+#include <string>
+
+namespace ringtrack::testing {
+
+/// Result of a finished command.
+struct CommandResult {
+  int exit_code{-1};
+  std::string out;
+  std::string err;
+};
+
+/// Runs `command` through /bin/sh; stdout and stderr are captured separately.
+CommandResult run_command(const std::string& command);
+
+/// A fresh empty temporary directory (removed by the caller if it wishes).
+std::string make_temp_dir(const std::string& prefix);
+
+}  // namespace ringtrack::testing

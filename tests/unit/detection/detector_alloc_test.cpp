@@ -1,0 +1,67 @@
+// Steady-state detect() must not allocate: this test binary counts every operator new.
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <new>
+
+#include "ringtrack/detection/detector.hpp"
+#include "ringtrack/segmentation/segmenter.hpp"
+#include "ringtrack/sim/simple_scene.hpp"
+
+namespace {
+std::atomic<std::size_t> g_allocations{0};
+}  // namespace
+
+void* operator new(std::size_t size) {
+  g_allocations.fetch_add(1, std::memory_order_relaxed);
+  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
+  throw std::bad_alloc();
+}
+void* operator new[](std::size_t size) {
+  return operator new(size);
+}
+void operator delete(void* p) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p) noexcept {
+  std::free(p);
+}
+void operator delete(void* p, std::size_t) noexcept {
+  std::free(p);
+}
+void operator delete[](void* p, std::size_t) noexcept {
+  std::free(p);
+}
+
+namespace ringtrack::detection {
+namespace {
+
+TEST(DetectorAllocations, SteadyStateCallsDoNotAllocate) {
+  const auto model = core::SensorModel::vlp16();
+  const auto ten = sim::render(model, sim::SimpleScene::open_field(10));
+  const auto three = sim::render(model, sim::SimpleScene::open_field(3));
+  segmentation::Segmenter segmenter{core::SegmentationConfig{}};
+  std::vector<std::uint8_t> labels_ten, labels_three;
+  segmenter.segment(ten.scan, labels_ten);
+  segmenter.segment(three.scan, labels_three);
+  const std::vector<Eigen::Vector3f> predictions = {Eigen::Vector3f(5.0f, 1.5f, -2.0f)};
+  Detector detector{core::DetectionConfig{}};
+  // Warm-up: the largest scan grows every buffer once (and the counter does see that).
+  const std::size_t start = g_allocations.load();
+  detector.detect(ten.scan, labels_ten, core::Pose{}, predictions);
+  detector.detect(three.scan, labels_three, core::Pose{}, predictions);
+  EXPECT_GT(g_allocations.load() - start, 10u);
+  const std::size_t before = g_allocations.load();
+  std::size_t found = 0;
+  for (int k = 0; k < 10; ++k) {
+    found += detector.detect(ten.scan, labels_ten, core::Pose{}, predictions).size();
+    found += detector.detect(three.scan, labels_three, core::Pose{}, predictions).size();
+  }
+  EXPECT_EQ(g_allocations.load() - before, 0u);
+  EXPECT_EQ(found, 10u * (10u + 3u));
+}
+
+}  // namespace
+}  // namespace ringtrack::detection

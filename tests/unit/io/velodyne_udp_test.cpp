@@ -1,0 +1,153 @@
+// Live UDP: packets replayed to a loopback socket give the same scans as decoding them directly;
+// a consumer that falls behind loses whole scans (counted), never parts of one.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
+#include <vector>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/io/velodyne_decoder.hpp"
+#include "ringtrack/io/velodyne_udp_source.hpp"
+#include "support/velodyne_encoder.hpp"
+
+namespace ringtrack::io {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::vector<test::EncodedVelodynePacket> packets(double revolutions) {
+  test::VelodyneEncoderOptions eo;
+  eo.start_azimuth_deg = 180.0;
+  eo.start_time_us = 2e9;
+  const test::VelodyneEncoder enc(eo);
+  const double per_rev = 360.0 / (enc.advance_deg() * enc.sequences_per_packet());
+  return enc.encode(0, static_cast<long long>(revolutions * per_rev), [](long long s, int laser) {
+    const auto d = static_cast<std::uint16_t>(600 + (s * 13 + laser * 71) % 9000);
+    return test::VelodyneEchoPair{{d, static_cast<std::uint8_t>(laser * 9)}, {}};
+  });
+}
+
+// Sends the packets to 127.0.0.1:port, pausing now and then so the receive buffer never fills.
+void replay(const std::vector<test::EncodedVelodynePacket>& ps, std::uint16_t port) {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(port);
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  for (std::size_t i = 0; i < ps.size(); ++i) {
+    const auto sent = ::sendto(fd, ps[i].payload.data(), ps[i].payload.size(), 0,
+                               reinterpret_cast<const sockaddr*>(&to), sizeof to);
+    ASSERT_EQ(sent, static_cast<ssize_t>(ps[i].payload.size()));
+    if (i % 20 == 19) std::this_thread::sleep_for(2ms);
+  }
+  ::close(fd);
+}
+
+std::vector<core::OrganizedScan> decode_direct(const std::vector<test::EncodedVelodynePacket>& ps) {
+  VelodyneDecoder decoder;
+  std::vector<core::OrganizedScan> scans;
+  for (const auto& p : ps) decoder.add_packet(p.payload, p.host_stamp_ns);
+  decoder.finish();
+  while (auto s = decoder.pop_scan()) scans.push_back(std::move(*s));
+  return scans;
+}
+
+TEST(VelodyneUdp, LoopbackReplayGivesTheFileScans) {
+  const auto ps = packets(3.3);
+  VelodyneUdpOptions options;
+  options.host = "127.0.0.1";
+  options.port = 0;
+  options.max_queued_scans = 100;
+  VelodyneUdpSource source(options);
+  ASSERT_NE(source.port(), 0);
+  replay(ps, source.port());
+  // Wait until every datagram arrived, then stop (flushes the scan in progress).
+  for (int i = 0; i < 200 && source.stats().datagrams < ps.size(); ++i) std::this_thread::sleep_for(10ms);
+  source.stop();
+  EXPECT_EQ(source.stats().datagrams, ps.size()) << source.summary();
+  std::vector<core::OrganizedScan> scans;
+  while (auto s = source.next(0ms)) scans.push_back(std::move(*s));
+  const auto expected = decode_direct(ps);
+  ASSERT_EQ(expected.size(), 2u);
+  ASSERT_EQ(scans.size(), expected.size()) << source.summary();
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    EXPECT_EQ(scans[s].statuses(), expected[s].statuses());
+    for (std::size_t i = 0; i < scans[s].size(); ++i) {
+      if (scans[s].valid(i)) {
+        ASSERT_EQ(scans[s].range_m(i), expected[s].range_m(i));
+      }
+    }
+    EXPECT_EQ(scans[s].column_azimuth_rad, expected[s].column_azimuth_rad);
+    // Receive stamps (live) are not the encoder's; they must be recent and increasing.
+    EXPECT_LT(scans[s].column_stamp_ns.front(), scans[s].column_stamp_ns.back());
+  }
+  EXPECT_EQ(source.stats().dropped_scans, 0u);
+  EXPECT_FALSE(source.next(0ms).has_value());
+}
+
+TEST(VelodyneUdp, SlowConsumerLosesWholeScansAndTheyAreCounted) {
+  const auto ps = packets(4.3);
+  VelodyneUdpOptions options;
+  options.host = "127.0.0.1";
+  options.port = 0;
+  options.max_queued_scans = 1;
+  VelodyneUdpSource source(options);
+  replay(ps, source.port());  // nobody reads meanwhile
+  for (int i = 0; i < 200 && source.stats().datagrams < ps.size(); ++i) std::this_thread::sleep_for(10ms);
+  source.stop();
+  const auto produced = decode_direct(ps).size();
+  ASSERT_EQ(produced, 3u);
+  EXPECT_EQ(source.stats().dropped_scans, produced - 1) << source.summary();
+  auto last = source.next(0ms);
+  ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(last->valid_count(), decode_direct(ps).back().valid_count());  // the freshest is kept
+  EXPECT_NE(source.summary().find("scans dropped"), std::string::npos);
+}
+
+TEST(VelodyneUdp, ErrorsOfTheReceiverReachTheConsumer) {
+  VelodyneUdpOptions options;
+  options.host = "127.0.0.1";
+  options.port = 0;
+  VelodyneDecoderOptions decoder;
+  decoder.model = "vlp32c";  // the packets say VLP-16
+  VelodyneUdpSource source(options, decoder);
+  replay(packets(0.1), source.port());
+  bool thrown = false;
+  for (int i = 0; i < 100 && !thrown; ++i) {
+    try {
+      source.next(20ms);
+    } catch (const core::InputError&) {
+      thrown = true;
+    }
+  }
+  EXPECT_TRUE(thrown);
+}
+
+TEST(VelodyneUdp, UrlsAndBindErrors) {
+  EXPECT_EQ(parse_udp_url("udp://:2369").port, 2369);
+  EXPECT_EQ(parse_udp_url("udp://*:2369").host, "0.0.0.0");
+  EXPECT_EQ(parse_udp_url("udp://192.168.1.77").port, 2368);
+  EXPECT_EQ(parse_udp_url("udp://127.0.0.1:0").host, "127.0.0.1");
+  EXPECT_THROW(parse_udp_url("tcp://1.2.3.4:5"), core::ConfigError);
+  EXPECT_THROW(parse_udp_url("udp://host.example:5"), core::ConfigError);
+  EXPECT_THROW(parse_udp_url("udp://1.2.3.4:70000"), core::ConfigError);
+  VelodyneUdpOptions options;
+  options.host = "127.0.0.1";
+  options.port = 0;
+  options.reuse_address = false;
+  VelodyneUdpSource first(options);
+  VelodyneUdpOptions same = options;
+  same.port = first.port();
+  EXPECT_THROW(VelodyneUdpSource{same}, core::InputError);  // already bound
+  options.host = "203.0.113.7";  // not a local address
+  EXPECT_THROW(VelodyneUdpSource{options}, core::InputError);
+}
+
+}  // namespace
+}  // namespace ringtrack::io

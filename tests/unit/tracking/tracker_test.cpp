@@ -1,0 +1,447 @@
+// Tracker behaviour on scripted detection streams: identities, occlusion, false detections,
+// deletion timing, static/dynamic classification, velocity estimation, many targets.
+
+#include "ringtrack/tracking/tracker.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <random>
+#include <set>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/tracking/association_cost.hpp"
+#include "support/scripted_detections.hpp"
+
+namespace ringtrack::tracking {
+namespace {
+
+using testing::person_detection;
+using testing::PersonShape;
+using testing::scan_stamp_ns;
+
+constexpr double kDt = 0.1;
+
+// One scripted object in one scan: who it is (for checking identities) and its detection.
+struct Scripted {
+  int who;
+  core::Detection detection;
+};
+
+// Runs the tracker over a script and records, per object, the hypothesis id its detection got
+// in every scan where it was detected (0 if the detection was not assigned nor created).
+class ScriptRunner {
+ public:
+  explicit ScriptRunner(const core::TrackingConfig& config = {}, std::uint64_t seed = 1)
+      : tracker(config), rng(seed) {}
+
+  const std::vector<Hypothesis>& step(std::vector<Scripted> objects) {
+    std::shuffle(objects.begin(), objects.end(), rng);  // order must not matter
+    std::vector<core::Detection> detections;
+    for (const auto& o : objects) detections.push_back(o.detection);
+    const auto& hypotheses = tracker.update(detections, scan_stamp_ns(scan++));
+    for (std::size_t j = 0; j < objects.size(); ++j) {
+      std::uint64_t id = 0;
+      for (const auto& h : hypotheses) {
+        if (h.detection == static_cast<int>(j)) id = h.id;
+      }
+      ids[objects[j].who].push_back(id);
+    }
+    return hypotheses;
+  }
+
+  // True when every detection of `who` went to one and the same hypothesis.
+  [[nodiscard]] bool single_identity(int who) const {
+    const auto& v = ids.at(who);
+    return !v.empty() && v.front() != 0 &&
+           std::all_of(v.begin(), v.end(), [&](auto id) { return id == v.front(); });
+  }
+
+  [[nodiscard]] const Hypothesis* find(std::uint64_t id) const {
+    for (const auto& h : tracker.hypotheses()) {
+      if (h.id == id) return &h;
+    }
+    return nullptr;
+  }
+
+  Tracker tracker;
+  std::mt19937_64 rng;
+  int scan{0};
+  std::map<int, std::vector<std::uint64_t>> ids;
+};
+
+Eigen::Vector3f at(double x, double y) {
+  return {static_cast<float>(x), static_cast<float>(y), 0.0f};
+}
+
+PersonShape noisy(float centroid_noise = 0.03f, float box_noise = 0.02f) {
+  PersonShape s;
+  s.centroid_noise_m = centroid_noise;
+  s.box_noise_m = box_noise;
+  return s;
+}
+
+TEST(Tracker, EstimatesWalkingSpeedWithinTenPercentAfterTwoSeconds) {
+  for (std::uint64_t seed = 1; seed <= 10; ++seed) {
+    ScriptRunner run({}, seed);
+    std::mt19937_64 noise(seed * 101);
+    for (int k = 0; k <= 20; ++k) {  // 2 s at 10 Hz after the first detection
+      run.step({{0, person_detection(at(1.0 * k * kDt, 3.0), noisy(), &noise)}});
+    }
+    ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+    const auto& h = run.tracker.hypotheses().front();
+    EXPECT_LT((h.velocity_mps - Eigen::Vector3d(1, 0, 0)).norm(), 0.1)
+        << "seed " << seed << ": " << h.velocity_mps.transpose();
+    EXPECT_EQ(h.velocity_mps, h.filter.velocity());  // above 1 km/h: reported as estimated
+  }
+}
+
+TEST(Tracker, ReportsZeroBelowOneKmhButKeepsLearning) {
+  // 0.2 m/s = 0.72 km/h: reported as zero, yet the filter's own estimate converges to it.
+  ScriptRunner run;
+  std::mt19937_64 noise(4);
+  for (int k = 0; k <= 60; ++k)
+    run.step({{0, person_detection(at(0.2 * k * kDt, 0), noisy(0.01f, 0.01f), &noise)}});
+  const auto& h = run.tracker.hypotheses().front();
+  EXPECT_TRUE(h.velocity_mps.isZero());
+  EXPECT_NEAR(h.filter.velocity().x(), 0.2, 0.05);
+  // It speeds up to 2 m/s: now reported.
+  for (int k = 61; k <= 90; ++k) {
+    run.step({{0, person_detection(at(0.2 * 6.0 + 2.0 * (k - 60) * kDt, 0), noisy(0.01f, 0.01f),
+                                   &noise)}});
+  }
+  const auto& h2 = run.tracker.hypotheses().front();
+  EXPECT_NEAR(h2.velocity_mps.x(), 2.0, 0.2);
+}
+
+TEST(Tracker, CapsSpeedAtTenKmh) {
+  core::TrackingConfig config;
+  config.cost = core::AssociationCost::kEuclidean;
+  config.gate_euclidean_m = 2.0;
+  ScriptRunner run(config);
+  for (int k = 0; k <= 30; ++k)
+    run.step({{0, person_detection(at(5.0 * k * kDt, 0), {})}});  // 18 km/h
+  ASSERT_TRUE(run.single_identity(0));
+  const auto& h = run.tracker.hypotheses().front();
+  EXPECT_NEAR(h.velocity_mps.norm(), 10.0 / 3.6, 1e-9);
+  EXPECT_LE(h.filter.velocity().norm(), 10.0 / 3.6 + 1e-9);
+}
+
+TEST(Tracker, TwoPeopleCrossingKeepTheirIds) {
+  // Head-on passing 0.8 m apart, then an X crossing at right angles with the second person
+  // reaching the crossing point 0.6 s after the first.
+  ScriptRunner run({}, 5);
+  std::mt19937_64 noise(5);
+  for (int k = 0; k <= 100; ++k) {
+    const double t = k * kDt;
+    run.step({{0, person_detection(at(-5.0 + 1.0 * t, 0.4), noisy(), &noise)},
+              {1, person_detection(at(5.0 - 1.2 * t, -0.4), noisy(), &noise)}});
+  }
+  EXPECT_TRUE(run.single_identity(0));
+  EXPECT_TRUE(run.single_identity(1));
+  EXPECT_EQ(run.tracker.hypotheses().size(), 2u);
+
+  ScriptRunner cross({}, 6);
+  for (int k = 0; k <= 80; ++k) {
+    const double t = k * kDt;
+    cross.step({{0, person_detection(at(-4.0 + 1.0 * t, 0.0), noisy(), &noise)},
+                {1, person_detection(at(0.0, -4.6 + 1.0 * t), noisy(), &noise)}});
+  }
+  EXPECT_TRUE(cross.single_identity(0));
+  EXPECT_TRUE(cross.single_identity(1));
+  EXPECT_EQ(cross.tracker.hypotheses().size(), 2u);
+}
+
+TEST(Tracker, OccludedForOneSecondKeepsItsId) {
+  ScriptRunner run({}, 7);
+  std::mt19937_64 noise(7);
+  for (int k = 0; k <= 60; ++k) {
+    const double t = k * kDt;
+    std::vector<Scripted> objects;
+    if (k < 20 || k >= 30)
+      objects.push_back({0, person_detection(at(1.0 * t, 2.0), noisy(), &noise)});
+    // A standing person hidden during the same second.
+    if (k < 20 || k >= 30) objects.push_back({1, person_detection(at(-3.0, 1.0), noisy(), &noise)});
+    run.step(objects);
+    if (k == 29) {
+      EXPECT_EQ(run.tracker.hypotheses().size(), 2u);
+      for (const auto& h : run.tracker.hypotheses()) EXPECT_EQ(h.missed_scans, 10);
+    }
+  }
+  EXPECT_TRUE(run.single_identity(0));
+  EXPECT_TRUE(run.single_identity(1));
+  EXPECT_EQ(run.tracker.hypotheses().size(), 2u);
+}
+
+TEST(Tracker, OneScanFalseDetectionIsDeletedAtTheSixthMissedScan) {
+  const core::TrackingConfig config;
+  ScriptRunner run(config);
+  const auto spurious = person_detection(at(4.0, 4.0), {});
+  const int expected =
+      missed_scans_until_deletion(config, run.tracker.measurement_covariance(spurious), kDt, 0);
+  EXPECT_EQ(expected, 6);  // the number docs/tracking.md states for the defaults
+  run.step({{1, spurious}});
+  ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+  for (int missed = 1; missed <= expected; ++missed) {
+    run.step({});
+    EXPECT_EQ(run.tracker.hypotheses().size(), missed < expected ? 1u : 0u) << "missed " << missed;
+  }
+}
+
+TEST(Tracker, EstablishedTrackCoastsTheDocumentedNumberOfScans) {
+  const core::TrackingConfig config;
+  ScriptRunner run(config);
+  const auto d = person_detection(at(2.0, 0.0), {});
+  const int updates = 50;
+  const int expected =
+      missed_scans_until_deletion(config, run.tracker.measurement_covariance(d), kDt, updates);
+  EXPECT_EQ(expected, 17);  // docs/tracking.md: about 1.7 s at 10 Hz
+  for (int k = 0; k <= updates; ++k) run.step({{0, d}});
+  for (int missed = 1; missed <= expected; ++missed) {
+    run.step({});
+    EXPECT_EQ(run.tracker.hypotheses().size(), missed < expected ? 1u : 0u) << "missed " << missed;
+  }
+}
+
+TEST(Tracker, StandingPersonStaysStaticDespiteNoiseAndOcclusion) {
+  ScriptRunner run({}, 8);
+  std::mt19937_64 noise(8);
+  std::uniform_int_distribution<int> pick(0, 5);
+  for (int k = 0; k < 300; ++k) {
+    PersonShape shape = noisy(0.04f, 0.04f);
+    core::Detection d;
+    switch (k == 0 ? 0 : pick(noise)) {
+      case 1:  // lower half occluded
+        shape.visible_from_m = 0.9f;
+        d = person_detection(at(3, 3), shape, &noise);
+        break;
+      case 2:  // only the head and shoulders
+        shape.visible_from_m = 1.4f;
+        shape.radius_m = 0.15f;
+        d = person_detection(at(3, 3), shape, &noise);
+        break;
+      case 3:  // only the left half seen
+        d = person_detection(at(3, 3), shape, &noise);
+        d.box.max.x() = d.box.min.x() + 0.25f;
+        d.centroid.x() -= 0.125f;
+        break;
+      case 4:  // missed
+        run.step({});
+        continue;
+      default:
+        d = person_detection(at(3, 3), shape, &noise);
+    }
+    const auto& hs = run.step({{0, d}});
+    ASSERT_EQ(hs.size(), 1u);
+    EXPECT_FALSE(hs.front().dynamic) << "scan " << k;
+    EXPECT_FALSE(hs.front().ever_dynamic);
+  }
+  EXPECT_TRUE(run.single_identity(0));
+}
+
+TEST(Tracker, StaticWhenOnlyTheHeightRangeOfThePartialViewChanges) {
+  // Created from the legs alone, later seen only from the waist up: the 3-D boxes are disjoint,
+  // the footprints are not.
+  ScriptRunner run;
+  PersonShape legs;
+  legs.height_m = 0.8f;
+  run.step({{0, person_detection(at(3, 0), legs)}});
+  PersonShape torso;
+  torso.visible_from_m = 1.0f;
+  for (int k = 0; k < 20; ++k) run.step({{0, person_detection(at(3, 0), torso)}});
+  ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+  EXPECT_FALSE(run.tracker.hypotheses().front().box.intersects(
+      run.tracker.hypotheses().front().initial_box));
+  EXPECT_FALSE(run.tracker.hypotheses().front().dynamic);
+}
+
+TEST(Tracker, WalkingPersonTurnsDynamicWithinOneSecondOfLeavingItsBox) {
+  ScriptRunner run({}, 9);
+  std::mt19937_64 noise(9);
+  const PersonShape shape = noisy(0.03f, 0.02f);
+  int left_at = -1, dynamic_at = -1;
+  core::Box3 initial;
+  for (int k = 0; k < 60; ++k) {
+    const double x = k < 10 ? 0.0 : 1.0 * (k - 10) * kDt;  // stands 1 s, then walks at 1 m/s
+    const auto& hs = run.step({{0, person_detection(at(x, 5.0), shape, &noise)}});
+    ASSERT_EQ(hs.size(), 1u);
+    const core::Box3 truth = person_detection(at(x, 5.0), shape).box;
+    if (k == 0) initial = truth;
+    if (left_at < 0 && !truth.intersects(initial)) left_at = k;
+    if (dynamic_at < 0 && hs.front().dynamic) dynamic_at = k;
+    if (k < 10) {
+      EXPECT_FALSE(hs.front().dynamic);
+    }
+  }
+  ASSERT_GE(left_at, 0);
+  ASSERT_GE(dynamic_at, 0);
+  EXPECT_LE(dynamic_at, left_at + 10);
+  EXPECT_TRUE(run.single_identity(0));
+}
+
+TEST(Tracker, DynamicPersonComingToRestIsStaticAgainButStaysEverDynamic) {
+  core::TrackingConfig config;
+  config.rest_scans_to_static = 30;
+  ScriptRunner run(config);
+  for (int k = 0; k < 40; ++k) run.step({{0, person_detection(at(1.0 * k * kDt, 0), {})}});
+  ASSERT_TRUE(run.tracker.hypotheses().front().dynamic);
+  for (int k = 0; k < 60; ++k) run.step({{0, person_detection(at(3.9, 0), {})}});
+  const auto& h = run.tracker.hypotheses().front();
+  EXPECT_FALSE(h.dynamic);
+  EXPECT_TRUE(h.ever_dynamic);
+  EXPECT_TRUE(run.single_identity(0));
+}
+
+TEST(Tracker, RelaxedDetectionsNeverStartTracksButConfirmThem) {
+  ScriptRunner run;
+  auto relaxed = person_detection(at(1, 1), {});
+  relaxed.relaxed = true;
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_TRUE(run.step({{0, relaxed}}).empty());
+    EXPECT_EQ(run.tracker.stats().relaxed_unassigned, 1);
+  }
+  // A strict detection starts a track; relaxed ones then keep it alive past the deletion time.
+  auto strict = person_detection(at(5, 5), {});
+  run.step({{1, strict}});
+  auto relaxed_near = strict;
+  relaxed_near.relaxed = true;
+  for (int k = 0; k < 40; ++k) run.step({{1, relaxed_near}});
+  ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+  EXPECT_EQ(run.tracker.hypotheses().front().missed_scans, 0);
+  EXPECT_TRUE(run.tracker.hypotheses().front().last_detection.relaxed);
+  EXPECT_TRUE(run.single_identity(1));
+}
+
+TEST(Tracker, YoungerHypothesesNearOlderOnesAreDeleted) {
+  ScriptRunner run;
+  PersonShape legs, torso;
+  legs.height_m = 0.9f;
+  torso.visible_from_m = 0.95f;
+  run.step({{0, person_detection(at(2, 2), {})}});
+  for (int k = 0; k < 5; ++k) {
+    // Over-segmented: legs and torso apart; the younger hypothesis from the torso must go.
+    auto t = person_detection(at(2.1, 2.0), torso);
+    run.step({{0, person_detection(at(2, 2), legs)}, {1, t}});
+    EXPECT_EQ(run.tracker.hypotheses().size(), 1u);
+  }
+  EXPECT_GE(run.tracker.stats().deleted_merged, 1);
+  // A drone two metres above the person is a separate object.
+  auto drone = person_detection(Eigen::Vector3f(2.0f, 2.0f, 3.5f), [] {
+    PersonShape s;
+    s.height_m = 0.3f;
+    return s;
+  }());
+  run.step({{0, person_detection(at(2, 2), {})}, {2, drone}});
+  run.step({{0, person_detection(at(2, 2), {})}, {2, drone}});
+  EXPECT_EQ(run.tracker.hypotheses().size(), 2u);
+}
+
+TEST(Tracker, FiftyPeopleOnCirclesKeepTheirIds) {
+  ScriptRunner run({}, 10);
+  std::mt19937_64 noise(10);
+  std::uniform_real_distribution<double> phase(0.0, 2.0 * std::numbers::pi);
+  std::uniform_real_distribution<double> clutter(0.0, 50.0);
+  std::vector<double> phase0(50);
+  for (auto& p : phase0) p = phase(noise);
+  for (int k = 0; k < 200; ++k) {
+    std::vector<Scripted> objects;
+    for (int i = 0; i < 50; ++i) {
+      // Circles of radius 1.5 m on a 5 m grid, 1 m/s, alternating directions.
+      const double w = (i % 2 == 0 ? 1.0 : -1.0) / 1.5;
+      const double a = phase0[i] + w * k * kDt;
+      const double cx = 5.0 * (i % 10), cy = 5.0 * (i / 10);
+      objects.push_back({i, person_detection(at(cx + 1.5 * std::cos(a), cy + 1.5 * std::sin(a)),
+                                             noisy(), &noise)});
+    }
+    // Clutter: single-scan false detections far from everyone (x > 100 m).
+    for (int c = 0; c < 3; ++c)
+      objects.push_back({100 + c, person_detection(at(100 + clutter(noise), clutter(noise)), {})});
+    run.step(objects);
+  }
+  int near_people = 0;
+  for (const auto& h : run.tracker.hypotheses()) near_people += h.position().x() < 60.0 ? 1 : 0;
+  EXPECT_EQ(near_people, 50);
+  for (int i = 0; i < 50; ++i) EXPECT_TRUE(run.single_identity(i)) << "person " << i;
+}
+
+TEST(Tracker, PredictedPositionsFollowTheVelocity) {
+  ScriptRunner run;
+  for (int k = 0; k <= 40; ++k) run.step({{0, person_detection(at(1.0 * k * kDt, 0), {})}});
+  const auto& h = run.tracker.hypotheses().front();
+  const auto predicted = run.tracker.predicted_positions(scan_stamp_ns(41));
+  ASSERT_EQ(predicted.size(), 1u);
+  EXPECT_TRUE(
+      predicted[0].isApprox((h.position() + kDt * h.filter.velocity()).cast<float>(), 1e-5f));
+  EXPECT_NEAR(predicted[0].x(), 4.1, 0.02);
+}
+
+TEST(Tracker, PrescreenedCostsNeverHideAnAllowedPair) {
+  // pair_cost() returns +inf only where the exact cost exceeds the gate.
+  for (const auto cost :
+       {core::AssociationCost::kBhattacharyya, core::AssociationCost::kMahalanobis}) {
+    core::TrackingConfig config;
+    config.cost = cost;
+    Tracker tracker(config);
+    std::mt19937_64 rng(12);
+    std::uniform_real_distribution<float> pos(-3.0f, 3.0f);
+    std::vector<core::Detection> seeds;
+    for (int i = 0; i < 30; ++i)
+      seeds.push_back(person_detection(at(pos(rng) * 5, pos(rng) * 5), {}));
+    tracker.update(seeds, 0);
+    tracker.update({}, 300000000);  // grow the covariances a little
+    int inf = 0;
+    for (const auto& h : tracker.hypotheses()) {
+      for (int j = 0; j < 200; ++j) {
+        PersonShape s;
+        s.radius_m = 0.1f + 0.2f * std::abs(pos(rng));
+        const auto d = person_detection(at(pos(rng) * 5, pos(rng) * 5), s);
+        const double c = tracker.pair_cost(h, d);
+        const Eigen::Matrix3d r = tracker.measurement_covariance(d);
+        const double exact = cost == core::AssociationCost::kBhattacharyya
+                                 ? bhattacharyya_distance(h.position(), h.position_covariance(),
+                                                          d.centroid.cast<double>(), r)
+                                 : mahalanobis_distance(h.position(), h.position_covariance(),
+                                                        d.centroid.cast<double>(), r);
+        if (std::isinf(c)) {
+          ++inf;
+          EXPECT_GT(exact, tracker.gate());
+        } else {
+          EXPECT_NEAR(c, exact, 1e-9);
+        }
+      }
+    }
+    EXPECT_GT(inf, 0);
+  }
+}
+
+TEST(Tracker, RejectsBackwardStampsAndNonFiniteDetections) {
+  Tracker tracker{core::TrackingConfig{}};
+  tracker.update({}, 1000);
+  tracker.update({}, 1000);  // equal stamps are allowed
+  EXPECT_THROW(tracker.update({}, 999), core::InputError);
+  auto d = person_detection(at(0, 0), {});
+  d.centroid.x() = std::nanf("");
+  EXPECT_THROW(tracker.update({d}, 2000), core::InputError);
+}
+
+TEST(Tracker, EveryCostTracksTheCrossing) {
+  for (const auto cost : {core::AssociationCost::kMahalanobis, core::AssociationCost::kEuclidean}) {
+    core::TrackingConfig config;
+    config.cost = cost;
+    ScriptRunner run(config, 11);
+    std::mt19937_64 noise(11);
+    for (int k = 0; k <= 100; ++k) {
+      const double t = k * kDt;
+      run.step({{0, person_detection(at(-5.0 + 1.0 * t, 0.4), noisy(), &noise)},
+                {1, person_detection(at(5.0 - 1.2 * t, -0.4), noisy(), &noise)}});
+    }
+    EXPECT_TRUE(run.single_identity(0));
+    EXPECT_TRUE(run.single_identity(1));
+  }
+}
+
+}  // namespace
+}  // namespace ringtrack::tracking
