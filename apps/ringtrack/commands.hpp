@@ -22,6 +22,7 @@ struct ConfigOptions {
 
 void register_dump_config(CLI::App& app);
 void register_demo(CLI::App& app);
+void register_run(CLI::App& app);
 void register_eval(CLI::App& app);
 void register_simulate(CLI::App& app);
 void register_convert(CLI::App& app);

@@ -14,6 +14,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   ringtrack::cli::register_dump_config(app);
   ringtrack::cli::register_demo(app);
+  ringtrack::cli::register_run(app);
   ringtrack::cli::register_eval(app);
   ringtrack::cli::register_simulate(app);
   ringtrack::cli::register_convert(app);

@@ -12,6 +12,7 @@ namespace {
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kHourUs = 3600e6;
 constexpr std::int64_t kHourNs = 3'600'000'000'000;
+constexpr double kStreamBreakUs = 1e6;  // sensor-time gap that ends a scan regardless of azimuth
 
 double wrap360(double deg) {
   double a = std::fmod(deg, 360.0);
@@ -271,6 +272,16 @@ void VelodyneDecoder::add_sequence(const VelodyneSequence& seq, double sensor_us
   double dt = sensor_us - prev_sensor_us_;
   if (dt < -kHourUs / 2) dt += kHourUs;
   if (dt > kHourUs / 2) dt -= kHourUs;
+  if (dt > kStreamBreakUs) {
+    // A paused recording: whatever the azimuth says, these returns are not of the same scan.
+    ++stats_.stream_breaks;
+    finish_scan(true);
+    start_scan(rel, seq, stamp_ns);
+    prev_azimuth_deg_ = seq.azimuth_deg;
+    prev_rel_deg_ = rel;
+    prev_sensor_us_ = sensor_us;
+    return;
+  }
 
   // Sequences elapsed since the previous one. The sensor clock counts them exactly (and across
   // whole lost revolutions); the azimuth confirms it. Without a usable clock the azimuth
@@ -278,7 +289,7 @@ void VelodyneDecoder::add_sequence(const VelodyneSequence& seq, double sensor_us
   long long steps = 0;
   long long turns = 0;
   bool clock_ok = false;
-  if (dt > 0.5 * sequence_us && dt < 600e6) {
+  if (dt > 0.5 * sequence_us) {
     const long long steps_t = std::llround(dt / sequence_us);
     const double predicted = static_cast<double>(steps_t) * spacing_deg_;
     const long long k = std::llround((predicted - d_az) / 360.0);

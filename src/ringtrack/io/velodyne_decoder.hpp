@@ -56,6 +56,8 @@ struct VelodyneDecoderStats {
                                            ///< than scan_rate_hz), dropped
   std::uint64_t clock_mismatches{0};       ///< packet time stamps disagreeing with the azimuths
                                            ///< (gap sizes then come from the azimuth)
+  std::uint64_t stream_breaks{0};          ///< sensor-time gaps over a second (paused capture):
+                                           ///< the scan in progress ends, a new one starts
   std::uint64_t scans{0};                  ///< scans emitted
   std::uint64_t partial_scans_dropped{0};  ///< first/last scans not covering a revolution
   std::uint64_t invalid_columns{0};        ///< columns of emitted scans that no sequence filled

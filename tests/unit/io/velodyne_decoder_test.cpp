@@ -369,6 +369,51 @@ TEST(VelodyneDecoder, LostPacketsAreFoundFromTheAzimuthWithoutAClock) {
   }
 }
 
+TEST(VelodyneDecoder, PausedRecordingEndsTheScan) {
+  VelodyneEncoderOptions eo;
+  eo.start_azimuth_deg = 0.05;
+  eo.host_epoch_ns = kEpochNs;
+  const VelodyneEncoder enc(eo);
+  auto packets = encode_revolutions(enc, 1.5);
+  // After 40 packets (191 deg) the capture pauses for 5 s (sensor and host clocks) and goes on
+  // where the sensor happens to be then: packet 70, 334 deg, shortly before the cut.
+  std::vector<test::EncodedVelodynePacket> stream(packets.begin(), packets.begin() + 40);
+  for (std::size_t i = 70; i < packets.size(); ++i) {
+    auto p = packets[i];
+    std::uint32_t t = 0;
+    for (std::size_t b = 0; b < 4; ++b) t |= static_cast<std::uint32_t>(p.payload[1200 + b]) << (8 * b);
+    t += 5'000'000;
+    for (std::size_t b = 0; b < 4; ++b) p.payload[1200 + b] = static_cast<std::uint8_t>(t >> (8 * b));
+    p.host_stamp_ns += 5'000'000'000;
+    stream.push_back(p);
+  }
+  const Decoded d = decode(stream, {});
+  EXPECT_EQ(d.stats.stream_breaks, 1u);
+  EXPECT_EQ(d.stats.lost_sequences, 0u);
+  // Scan 0 runs from the cut to the pause, the rest of its columns invalid; scan 1 holds the
+  // 334..360 deg after the pause, its leading columns invalid (not shifted to the front); the
+  // partial revolution after the next cut is dropped.
+  ASSERT_EQ(d.scans.size(), 2u);
+  const int columns = d.scans[0].columns();
+  const int resume_column =
+      static_cast<int>(std::floor(enc.sequence_azimuth_deg(70 * 24) / (360.0 / columns)));
+  const auto has_data = [](const core::OrganizedScan& scan, int col) {
+    for (int r = 0; r < scan.rings(); ++r) {
+      if (scan.status(scan.index(r, col)) != core::ReturnStatus::kNoReturn) return true;
+    }
+    return false;
+  };
+  EXPECT_TRUE(has_data(d.scans[0], 40 * 24 - 1));
+  EXPECT_FALSE(has_data(d.scans[0], 40 * 24));
+  EXPECT_FALSE(has_data(d.scans[1], resume_column - 1));
+  EXPECT_TRUE(has_data(d.scans[1], resume_column));
+  EXPECT_NEAR(static_cast<double>(d.stats.invalid_columns),
+              (columns - 40 * 24) + resume_column, 2.0);
+  EXPECT_GT(d.scans[1].column_stamp_ns[static_cast<std::size_t>(resume_column)] -
+                d.scans[0].column_stamp_ns.front(),
+            5'000'000'000);
+}
+
 TEST(VelodyneDecoder, SensorTimeSourceFollowsTheHourAcrossItsWrap) {
   VelodyneEncoderOptions eo;
   eo.start_time_us = 3600e6 - 0.15e6;  // the sensor clock wraps 150 ms into the stream

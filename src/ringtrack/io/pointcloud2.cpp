@@ -1,0 +1,347 @@
+#include "ringtrack/io/pointcloud2.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <numbers>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/io/velodyne_packet.hpp"
+
+namespace ringtrack::io {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+template <typename T>
+T load(const std::uint8_t* p) {
+  T v;
+  std::memcpy(&v, p, sizeof v);  // little-endian host (checked at build: x86-64 / arm64)
+  return v;
+}
+
+double wrap360(double deg) {
+  double a = std::fmod(deg, 360.0);
+  if (a < 0) a += 360.0;
+  if (a >= 360.0) a = 0.0;
+  return a;
+}
+
+// Names of per-point time fields in common drivers: velodyne_pointcloud "time" (float seconds
+// after the header stamp), ouster "t" (uint32 ns after it), nebula "time_stamp" (ns after it),
+// hesai "timestamp" (float64 seconds since the epoch).
+const PointField* find_time_field(const PointCloud2& cloud) {
+  for (const char* name : {"time", "t", "time_stamp", "timestamp"}) {
+    if (const PointField* f = cloud.find(name)) return f;
+  }
+  return nullptr;
+}
+
+// A point's time in ns since the epoch from its time field: floating fields are seconds,
+// integer fields ns; small values are offsets from the header stamp, large ones absolute.
+std::int64_t point_time_ns(const PointField& field, double value, std::int64_t header_ns) {
+  const bool floating = field.datatype == static_cast<std::uint8_t>(PointFieldType::kFloat32) ||
+                        field.datatype == static_cast<std::uint8_t>(PointFieldType::kFloat64);
+  const double ns = floating ? value * 1e9 : value;
+  if (!std::isfinite(ns)) return header_ns;
+  if (std::abs(ns) > 1e15) return static_cast<std::int64_t>(std::llround(ns));  // absolute
+  return header_ns + static_cast<std::int64_t>(std::llround(ns));
+}
+
+}  // namespace
+
+std::size_t point_field_type_bytes(std::uint8_t datatype) {
+  switch (static_cast<PointFieldType>(datatype)) {
+    case PointFieldType::kInt8:
+    case PointFieldType::kUint8: return 1;
+    case PointFieldType::kInt16:
+    case PointFieldType::kUint16: return 2;
+    case PointFieldType::kInt32:
+    case PointFieldType::kUint32:
+    case PointFieldType::kFloat32: return 4;
+    case PointFieldType::kFloat64: return 8;
+  }
+  return 0;
+}
+
+const PointField* PointCloud2::find(const std::string& name) const {
+  for (const auto& f : fields) {
+    if (f.name == name) return &f;
+  }
+  return nullptr;
+}
+
+double PointCloud2::value(const PointField& field, std::uint32_t row, std::uint32_t column) const {
+  const std::uint8_t* p = data.data() + static_cast<std::size_t>(row) * row_step +
+                          static_cast<std::size_t>(column) * point_step + field.offset;
+  switch (static_cast<PointFieldType>(field.datatype)) {
+    case PointFieldType::kInt8: return load<std::int8_t>(p);
+    case PointFieldType::kUint8: return load<std::uint8_t>(p);
+    case PointFieldType::kInt16: return load<std::int16_t>(p);
+    case PointFieldType::kUint16: return load<std::uint16_t>(p);
+    case PointFieldType::kInt32: return load<std::int32_t>(p);
+    case PointFieldType::kUint32: return load<std::uint32_t>(p);
+    case PointFieldType::kFloat32: return load<float>(p);
+    case PointFieldType::kFloat64: return load<double>(p);
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
+
+PointCloud2 parse_pointcloud2(std::span<const std::uint8_t> message,
+                              RosSerialization serialization, const std::string& where) {
+  RosMessageCursor in(message, serialization, where + ": PointCloud2");
+  PointCloud2 c;
+  c.stamp_ns = in.header_stamp_ns(&c.frame_id);
+  c.height = in.u32();
+  c.width = in.u32();
+  // A field needs at least its name length, offset, datatype and count.
+  const std::uint32_t fields = in.sequence_length(13, "fields");
+  c.fields.resize(fields);
+  for (auto& f : c.fields) {
+    f.name = in.string();
+    f.offset = in.u32();
+    f.datatype = in.u8();
+    f.count = in.u32();
+  }
+  c.is_bigendian = in.u8() != 0;
+  c.point_step = in.u32();
+  c.row_step = in.u32();
+  const std::uint32_t bytes = in.sequence_length(1, "data");
+  c.data = in.bytes(bytes);
+  c.is_dense = in.u8() != 0;
+
+  const auto fail = [&where](const std::string& what) {
+    throw core::InputError(where + ": PointCloud2 " + what);
+  };
+  if (c.is_bigendian) fail("is big endian; only little-endian clouds are supported");
+  for (const auto& f : c.fields) {
+    const std::size_t size = point_field_type_bytes(f.datatype);
+    if (size == 0) {
+      fail("field '" + f.name + "' has unknown datatype " + std::to_string(f.datatype) +
+           " (expected 1..8)");
+    }
+    if (f.count == 0 ||
+        static_cast<std::uint64_t>(f.offset) + static_cast<std::uint64_t>(size) * f.count >
+            c.point_step) {
+      fail("field '" + f.name + "' (offset " + std::to_string(f.offset) + ", " +
+           std::to_string(f.count) + " x " + std::to_string(size) +
+           " bytes) does not fit in point_step " + std::to_string(c.point_step));
+    }
+  }
+  const std::uint64_t points = static_cast<std::uint64_t>(c.width) * c.height;
+  if (points > 0) {
+    if (static_cast<std::uint64_t>(c.width) * c.point_step > c.row_step) {
+      fail("row_step " + std::to_string(c.row_step) + " is less than width " +
+           std::to_string(c.width) + " x point_step " + std::to_string(c.point_step));
+    }
+    const std::uint64_t needed = static_cast<std::uint64_t>(c.row_step) * (c.height - 1) +
+                                 static_cast<std::uint64_t>(c.width) * c.point_step;
+    if (c.data.size() < needed) {
+      fail("data holds " + std::to_string(c.data.size()) + " bytes, expected " +
+           std::to_string(needed) + " for " + std::to_string(c.height) + " x " +
+           std::to_string(c.width) + " points");
+    }
+  }
+  return c;
+}
+
+PointCloud2Organizer::PointCloud2Organizer(PointCloud2Options options)
+    : options_(std::move(options)) {
+  if (!(options_.scan_rate_hz >= 1.0 && options_.scan_rate_hz <= 50.0)) {
+    throw core::ConfigError("point cloud scan rate " + std::to_string(options_.scan_rate_hz) +
+                            " Hz: expected 1..50");
+  }
+  if (!std::isfinite(options_.cut_azimuth_deg)) {
+    throw core::ConfigError("point cloud cut azimuth: expected a finite number of degrees");
+  }
+  if (!options_.model.empty()) {
+    try {
+      model_ = core::SensorModel::by_name(options_.model, options_.scan_rate_hz);
+    } catch (const core::ConfigError&) {
+      throw;
+    } catch (const core::Error& e) {
+      throw core::ConfigError(std::string("point cloud model: ") + e.what());
+    }
+  }
+}
+
+const core::SensorModel& PointCloud2Organizer::model() const {
+  if (!model_) throw core::Error("point cloud organizer: the model is not known before a cloud");
+  return *model_;
+}
+
+core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
+                                                   const std::string& where) {
+  const auto fail = [&where](const std::string& what) {
+    throw core::InputError(where + ": PointCloud2 " + what);
+  };
+  const PointField* fx = cloud.find("x");
+  const PointField* fy = cloud.find("y");
+  const PointField* fz = cloud.find("z");
+  if (fx == nullptr || fy == nullptr || fz == nullptr) fail("has no x, y and z fields");
+  const PointField* fi = cloud.find("intensity");
+  const PointField* fring = cloud.find(options_.ring_field);
+  const PointField* ftime = find_time_field(cloud);
+  const PointField* fdistance = cloud.find("distance");
+  if (fring == nullptr && cloud.height <= 1) {
+    fail("is unorganized (height 1) and has no '" + options_.ring_field +
+         "' field: expected a ring field or an organized cloud (one row per ring)");
+  }
+
+  // Ring of each row (organized clouds without a ring field).
+  int cloud_rings = 0;
+  if (fring != nullptr) {
+    for (std::uint32_t r = 0; r < cloud.height; ++r) {
+      for (std::uint32_t c = 0; c < cloud.width; ++c) {
+        const double v = cloud.value(*fring, r, c);
+        if (v >= 0 && v < 1024) cloud_rings = std::max(cloud_rings, static_cast<int>(v) + 1);
+      }
+    }
+  } else {
+    cloud_rings = static_cast<int>(cloud.height);
+  }
+  if (!model_) {
+    if (cloud_rings > 16) {
+      fail("has " + std::to_string(cloud_rings) +
+           " rings: name the sensor model (vlp32c or hdl32e)");
+    }
+    model_ = core::SensorModel::vlp16(options_.scan_rate_hz);
+  }
+  const core::SensorModel& model = *model_;
+  const int rings = model.rings();
+  if (fring == nullptr && cloud_rings != rings) {
+    fail("has " + std::to_string(cloud.height) + " rows, expected one per ring of the " +
+         model.name + " (" + std::to_string(rings) + ") or a '" + options_.ring_field + "' field");
+  }
+  bool flip_rows = false;
+  if (fring == nullptr) {
+    // Drivers differ: velodyne_pointcloud puts the bottom ring first, image-like drivers the top.
+    const auto row_elevation = [&](std::uint32_t r) {
+      double sum = 0;
+      int n = 0;
+      for (std::uint32_t c = 0; c < cloud.width; ++c) {
+        const double x = cloud.value(*fx, r, c);
+        const double y = cloud.value(*fy, r, c);
+        const double z = cloud.value(*fz, r, c);
+        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) continue;
+        if (x == 0 && y == 0 && z == 0) continue;
+        sum += std::atan2(z, std::hypot(x, y));
+        ++n;
+      }
+      return n > 0 ? std::optional<double>(sum / n) : std::nullopt;
+    };
+    std::optional<double> low;
+    std::optional<double> high;
+    for (std::uint32_t r = 0; r < cloud.height && !low; ++r) low = row_elevation(r);
+    for (std::uint32_t r = cloud.height; r-- > 0 && !high;) high = row_elevation(r);
+    flip_rows = low && high && *low > *high;
+  }
+
+  const int columns = model.columns();
+  const double step_deg = 360.0 / columns;
+  const double period_ns = 1e9 / (options_.scan_rate_hz * columns);
+  core::OrganizedScan scan(rings, columns);
+  std::vector<std::uint8_t> has_azimuth(static_cast<std::size_t>(columns), 0);
+  std::vector<std::int64_t> first_ns(static_cast<std::size_t>(columns),
+                                     std::numeric_limits<std::int64_t>::max());
+  const auto min_range = static_cast<float>(model.min_range_m);
+  const auto max_range = static_cast<float>(model.max_range_m);
+  ++stats_.clouds;
+  for (std::uint32_t row = 0; row < cloud.height; ++row) {
+    for (std::uint32_t col = 0; col < cloud.width; ++col) {
+      ++stats_.points;
+      const double x = cloud.value(*fx, row, col);
+      const double y = cloud.value(*fy, row, col);
+      const double z = cloud.value(*fz, row, col);
+      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) ||
+          (x == 0 && y == 0 && z == 0)) {
+        ++stats_.empty_points;
+        continue;
+      }
+      int ring = 0;
+      if (fring != nullptr) {
+        const double v = cloud.value(*fring, row, col);
+        if (!(v >= 0 && v < rings)) {
+          ++stats_.bad_ring_points;
+          continue;
+        }
+        ring = static_cast<int>(v);
+      } else {
+        ring = flip_rows ? rings - 1 - static_cast<int>(row) : static_cast<int>(row);
+      }
+      const auto r = static_cast<std::size_t>(ring);
+      // The measured distance: the driver's own, else from the beam origin (the point less the
+      // ring's vertical offset), as the packet decoder reports it.
+      const double dz = z - model.vertical_offset_m[r];
+      const double range =
+          fdistance != nullptr ? cloud.value(*fdistance, row, col) : std::sqrt(x * x + y * y + dz * dz);
+      if (!std::isfinite(range) || range <= 0.0) {
+        ++stats_.empty_points;
+        continue;
+      }
+      // The azimuth of the point's firing sequence: undo the laser's azimuth offset and the
+      // rotation during its firing delay (ringtrack azimuths turn against the sensor).
+      const double firing_rad = std::atan2(y, x) - model.azimuth_offset_rad[r] +
+                                kTwoPi * options_.scan_rate_hz * model.firing_offset_us[r] * 1e-6;
+      const double velodyne_deg = -firing_rad * 180.0 / std::numbers::pi;
+      const double rel = wrap360(velodyne_deg - options_.cut_azimuth_deg);
+      const int column = std::min(columns - 1, static_cast<int>(rel / step_deg));
+      const auto c = static_cast<std::size_t>(column);
+      if (has_azimuth[c] == 0) {
+        has_azimuth[c] = 1;
+        scan.column_azimuth_rad[c] = velodyne_to_ringtrack_azimuth_rad(velodyne_deg);
+      }
+      if (ftime != nullptr) {
+        first_ns[c] = std::min(first_ns[c], point_time_ns(*ftime, cloud.value(*ftime, row, col),
+                                                          cloud.stamp_ns));
+      }
+      const std::size_t i = scan.index(ring, column);
+      const auto range_f = static_cast<float>(range);
+      if (scan.valid(i)) {
+        ++stats_.dropped_points;
+        if (range_f >= scan.range_m(i)) continue;
+      }
+      if (range_f < min_range || range_f > max_range) {
+        if (!scan.valid(i)) {
+          scan.set_invalid(ring, column,
+                           range_f < min_range ? core::ReturnStatus::kTooClose
+                                               : core::ReturnStatus::kTooFar);
+        }
+        continue;
+      }
+      const float intensity = fi != nullptr ? static_cast<float>(cloud.value(*fi, row, col)) : 0.0f;
+      scan.set_return(ring, column, range_f, intensity,
+                      Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y),
+                                      static_cast<float>(z)));
+    }
+  }
+  // Columns without points: nominal azimuths; stamps continued from the nearest timed column at
+  // the nominal column period (or from the header stamp without a time field).
+  constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
+  int anchor = -1;  // the last column with a time, or the first one for the columns before it
+  for (int c = 0; c < columns; ++c) {
+    const auto u = static_cast<std::size_t>(c);
+    if (has_azimuth[u] == 0) {
+      scan.column_azimuth_rad[u] =
+          velodyne_to_ringtrack_azimuth_rad(options_.cut_azimuth_deg + (c + 0.5) * step_deg);
+    }
+    if (first_ns[u] != kUnset && anchor < 0) anchor = c;
+  }
+  for (int c = 0; c < columns; ++c) {
+    const auto u = static_cast<std::size_t>(c);
+    if (first_ns[u] != kUnset) {
+      anchor = c;
+      scan.column_stamp_ns[u] = first_ns[u];
+    } else if (anchor < 0) {
+      scan.column_stamp_ns[u] = cloud.stamp_ns + std::llround(c * period_ns);
+    } else {
+      scan.column_stamp_ns[u] =
+          first_ns[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns);
+    }
+  }
+  scan.stamp_ns = scan.column_stamp_ns[0];
+  return scan;
+}
+
+}  // namespace ringtrack::io

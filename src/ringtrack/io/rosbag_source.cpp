@@ -1,0 +1,162 @@
+#include "ringtrack/io/rosbag_source.hpp"
+
+#include <algorithm>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/io/velodyne_packet.hpp"
+
+namespace ringtrack::io {
+namespace {
+
+bool is_supported(const std::string& type) {
+  const std::string t = normalize_ros_type(type);
+  return t == kVelodyneScanRosType || t == kPointCloud2RosType;
+}
+
+std::string list_topics(const std::vector<RosbagTopicInfo>& topics) {
+  std::string s;
+  for (const auto& t : topics) s += (s.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
+  return s.empty() ? "none" : s;
+}
+
+}  // namespace
+
+std::vector<VelodyneScanPacket> parse_velodyne_scan(std::span<const std::uint8_t> message,
+                                                    RosSerialization serialization,
+                                                    const std::string& where) {
+  if (serialization == RosSerialization::kCdr) return parse_velodyne_scan_cdr(message, where);
+  RosMessageCursor in(message, serialization, where + ": VelodyneScan");
+  in.header_stamp_ns();
+  // A ROS 1 packet: time stamp (8 bytes) and a fixed-size uint8[1206] (no length prefix).
+  const std::uint32_t count = in.sequence_length(8 + kVelodyneDataPacketBytes, "packets");
+  std::vector<VelodyneScanPacket> packets(count);
+  for (auto& p : packets) {
+    p.stamp_ns = in.time_ns();
+    p.data = in.bytes(kVelodyneDataPacketBytes);
+  }
+  if (in.remaining() != 0) {
+    in.fail(std::to_string(in.remaining()) + " bytes after the last packet (expected none)");
+  }
+  return packets;
+}
+
+RosbagScanSource::RosbagScanSource(const std::filesystem::path& path, RosbagSourceOptions options)
+    : RosbagScanSource(open_rosbag(path), std::move(options)) {}
+
+RosbagScanSource::RosbagScanSource(std::unique_ptr<RosbagReader> reader,
+                                   RosbagSourceOptions options)
+    : reader_(std::move(reader)),
+      decoder_(std::move(options.decoder)),
+      organizer_(std::move(options.cloud)) {
+  const auto& topics = reader_->topics();
+  const std::string bag = reader_->path().string();
+  if (!options.topic.empty()) {
+    reader_->select_topic(options.topic);  // throws for unknown topics
+    topic_ = *std::find_if(topics.begin(), topics.end(),
+                           [&](const RosbagTopicInfo& t) { return t.name == options.topic; });
+    if (!is_supported(topic_.type)) {
+      throw core::InputError(bag + ": topic " + topic_.name + " has type " + topic_.type +
+                             "; expected velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2");
+    }
+  } else {
+    // The first supported topic that has messages, else the first supported one.
+    auto it = std::find_if(topics.begin(), topics.end(), [](const RosbagTopicInfo& t) {
+      return is_supported(t.type) && t.messages > 0;
+    });
+    if (it == topics.end()) {
+      it = std::find_if(topics.begin(), topics.end(),
+                        [](const RosbagTopicInfo& t) { return is_supported(t.type); });
+    }
+    if (it == topics.end()) {
+      throw core::InputError(bag +
+                             ": no velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2 topic "
+                             "(topics: " +
+                             list_topics(topics) + ")");
+    }
+    topic_ = *it;
+    reader_->select_topic(topic_.name);
+  }
+  packets_topic_ = normalize_ros_type(topic_.type) == kVelodyneScanRosType;
+}
+
+std::string RosbagScanSource::where(std::uint64_t index) const {
+  return reader_->path().string() + " (topic " + topic_.name + ", message " +
+         std::to_string(index) + ")";
+}
+
+std::optional<core::OrganizedScan> RosbagScanSource::next() {
+  RosbagMessage message;
+  if (!packets_topic_) {
+    while (!finished_) {
+      if (!reader_->next(message)) {
+        finished_ = true;
+        if (stats_.messages == 0) {
+          throw core::InputError(reader_->path().string() + ": topic " + topic_.name +
+                                 " holds no messages");
+        }
+        break;
+      }
+      ++stats_.messages;
+      const std::string at = where(message.index);
+      const PointCloud2 cloud = parse_pointcloud2(message.data, reader_->serialization(), at);
+      return organizer_.organize(cloud, at);
+    }
+    return std::nullopt;
+  }
+  if (auto scan = decoder_.pop_scan()) return scan;
+  while (!finished_) {
+    if (!reader_->next(message)) {
+      finished_ = true;
+      if (decoder_.stats().decoded_packets == 0) {
+        throw core::InputError(reader_->path().string() +
+                               ": no decodable Velodyne data packets on " + topic_.name + " (" +
+                               std::to_string(stats_.messages) + " messages, " +
+                               std::to_string(stats_.packets) + " packets)");
+      }
+      decoder_.finish();
+      break;
+    }
+    ++stats_.messages;
+    const std::string at = where(message.index);
+    const auto packets = parse_velodyne_scan(message.data, reader_->serialization(), at);
+    stats_.packets += packets.size();
+    try {
+      for (const auto& p : packets) decoder_.add_packet(p.data, p.stamp_ns);
+    } catch (const core::InputError& e) {
+      throw core::InputError(at + ": " + e.what());
+    }
+    if (auto scan = decoder_.pop_scan()) return scan;
+  }
+  return decoder_.pop_scan();
+}
+
+const core::SensorModel& RosbagScanSource::model() const {
+  return packets_topic_ ? decoder_.model() : organizer_.model();
+}
+
+std::string RosbagScanSource::summary() const {
+  std::string line = std::to_string(stats_.messages) + " messages of " + topic_.name + " (" +
+                     topic_.type + ")";
+  const auto add = [&line](const char* what, std::uint64_t n) {
+    if (n > 0) line += ", " + std::to_string(n) + " " + what;
+  };
+  if (packets_topic_) {
+    const auto& d = decoder_.stats();
+    line += ", " + std::to_string(d.decoded_packets) + " data packets decoded, " +
+            std::to_string(d.scans) + " scans";
+    add("skipped data packets", d.skipped_packets());
+    add("lost firing sequences", d.lost_sequences);
+    add("invalid columns", d.invalid_columns);
+    add("partial scans dropped", d.partial_scans_dropped);
+  } else {
+    const auto& o = organizer_.stats();
+    line += ", " + std::to_string(o.clouds) + " scans from " + std::to_string(o.points) + " points";
+    add("empty points", o.empty_points);
+    add("points that lost their cell to a nearer one", o.dropped_points);
+    add("points with a bad ring", o.bad_ring_points);
+  }
+  add("messages of other topics ignored", reader_->other_messages());
+  return line;
+}
+
+}  // namespace ringtrack::io

@@ -1,0 +1,89 @@
+#pragma once
+/// Organized scans from ROS bags (ROS 1 .bag or rosbag2): velodyne_msgs/VelodyneScan topics
+/// through the Velodyne decoder, sensor_msgs/PointCloud2 topics through PointCloud2Organizer.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/io/pointcloud2.hpp"
+#include "ringtrack/io/rosbag_reader.hpp"
+#include "ringtrack/io/velodyne_decoder.hpp"
+#include "ringtrack/io/velodyne_rosbag2_source.hpp"
+#include "ringtrack/io/velodyne_source.hpp"
+
+namespace ringtrack::io {
+
+/// velodyne_msgs/VelodyneScan (type name without "/msg/").
+inline constexpr const char* kVelodyneScanRosType = "velodyne_msgs/VelodyneScan";
+/// sensor_msgs/PointCloud2 (type name without "/msg/").
+inline constexpr const char* kPointCloud2RosType = "sensor_msgs/PointCloud2";
+
+/// Parses a serialized velodyne_msgs/VelodyneScan (Header, then VelodynePacket[] of {time
+/// stamp, uint8[1206] data}) in either serialization; throws core::InputError naming `where`.
+std::vector<VelodyneScanPacket> parse_velodyne_scan(std::span<const std::uint8_t> message,
+                                                    RosSerialization serialization,
+                                                    const std::string& where);
+
+/// What to read from a bag and how.
+struct RosbagSourceOptions {
+  std::string topic;  ///< "" = the first topic of a supported type (in the bag's order)
+  VelodyneDecoderOptions decoder;  ///< for VelodyneScan topics
+  PointCloud2Options cloud;        ///< for PointCloud2 topics
+};
+
+/// Counters of a bag source.
+struct RosbagSourceStats {
+  std::uint64_t messages{0};  ///< messages of the chosen topic read
+  std::uint64_t packets{0};   ///< VelodyneScan topics: packets in them
+};
+
+/// Reads one topic of a ROS 1 or ROS 2 bag and yields one OrganizedScan per revolution
+/// (VelodyneScan: the decoder's scans; PointCloud2: one scan per cloud).
+class RosbagScanSource final : public VelodyneScanSource {
+ public:
+  /// Opens a bag (open_rosbag) and chooses the topic; throws core::InputError when the bag or
+  /// the topic's type is unusable, core::ConfigError for an unknown topic or bad options.
+  explicit RosbagScanSource(const std::filesystem::path& path, RosbagSourceOptions options = {});
+  /// Same, over an opened reader.
+  RosbagScanSource(std::unique_ptr<RosbagReader> reader, RosbagSourceOptions options);
+
+  /// The next scan, or nullopt at the end; throws core::InputError naming the file, topic and
+  /// message index on corrupt messages.
+  std::optional<core::OrganizedScan> next() override;
+  /// The sensor model (known after the first scan).
+  [[nodiscard]] const core::SensorModel& model() const override;
+  /// One line of counters.
+  [[nodiscard]] std::string summary() const override;
+
+  /// The chosen topic.
+  [[nodiscard]] const RosbagTopicInfo& topic() const { return topic_; }
+  /// True for a VelodyneScan topic, false for PointCloud2.
+  [[nodiscard]] bool velodyne_packets() const { return packets_topic_; }
+  /// The bag reader.
+  [[nodiscard]] const RosbagReader& reader() const { return *reader_; }
+  /// The packet decoder (VelodyneScan topics).
+  [[nodiscard]] const VelodyneDecoder& decoder() const { return decoder_; }
+  /// The cloud organizer (PointCloud2 topics).
+  [[nodiscard]] const PointCloud2Organizer& organizer() const { return organizer_; }
+  /// Counters.
+  [[nodiscard]] const RosbagSourceStats& stats() const { return stats_; }
+
+ private:
+  [[nodiscard]] std::string where(std::uint64_t index) const;
+
+  std::unique_ptr<RosbagReader> reader_;
+  RosbagTopicInfo topic_;
+  bool packets_topic_{false};
+  VelodyneDecoder decoder_;
+  PointCloud2Organizer organizer_;
+  RosbagSourceStats stats_;
+  bool finished_{false};
+};
+
+}  // namespace ringtrack::io

@@ -1,0 +1,79 @@
+#include "ringtrack/io/scan_source.hpp"
+
+#include <filesystem>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/io/rosbag1_reader.hpp"
+#include "ringtrack/io/rosbag2_reader.hpp"
+#include "ringtrack/io/rosbag_reader.hpp"
+#include "ringtrack/io/rosbag_source.hpp"
+
+namespace ringtrack::io {
+
+namespace fs = std::filesystem;
+
+ScanInputFormat parse_scan_input_format(const std::string& name) {
+  if (name.empty() || name == "auto") return ScanInputFormat::kAuto;
+  if (name == "pcap" || name == "pcapng") return ScanInputFormat::kPcap;
+  if (name == "udp") return ScanInputFormat::kUdp;
+  if (name == "bag" || name == "rosbag" || name == "rosbag1" || name == "ros1") {
+    return ScanInputFormat::kRosbag1;
+  }
+  if (name == "rosbag2" || name == "bag2" || name == "ros2" || name == "db3") {
+    return ScanInputFormat::kRosbag2;
+  }
+  throw core::ConfigError("input format '" + name +
+                          "': expected auto, pcap, udp, bag (ROS 1) or rosbag2");
+}
+
+ScanInputFormat guess_scan_input_format(const std::string& input) {
+  if (input.rfind("udp://", 0) == 0) return ScanInputFormat::kUdp;
+  const fs::path path(input);
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw core::InputError(input + ": no such file or folder");
+  const std::string ext = path.extension().string();
+  if (ext == ".pcap" || ext == ".pcapng" || ext == ".cap") return ScanInputFormat::kPcap;
+  if (is_rosbag1_file(path) || ext == ".bag") return ScanInputFormat::kRosbag1;
+  if (is_rosbag2_path(path)) return ScanInputFormat::kRosbag2;
+  throw core::InputError(input +
+                         ": cannot tell the input format (expected udp://HOST:PORT, a .pcap/"
+                         ".pcapng file, a ROS 1 .bag file or a rosbag2 folder); name it with "
+                         "--format");
+}
+
+std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
+                                             const ScanSourceOptions& options) {
+  const ScanInputFormat format = options.format == ScanInputFormat::kAuto
+                                     ? guess_scan_input_format(input)
+                                     : options.format;
+  switch (format) {
+    case ScanInputFormat::kPcap:
+    case ScanInputFormat::kUdp: {
+      VelodyneSourceOptions v = options.velodyne;
+      v.format = format == ScanInputFormat::kPcap ? VelodyneInputFormat::kPcap
+                                                  : VelodyneInputFormat::kUdp;
+      return open_velodyne_source(input, v);
+    }
+    case ScanInputFormat::kRosbag1:
+    case ScanInputFormat::kRosbag2: {
+      RosbagSourceOptions b;
+      b.topic = options.topic;
+      b.decoder = options.velodyne.decoder;
+      b.cloud.model = options.velodyne.decoder.model;
+      b.cloud.scan_rate_hz = options.velodyne.decoder.scan_rate_hz;
+      b.cloud.cut_azimuth_deg = options.velodyne.decoder.cut_azimuth_deg;
+      b.cloud.ring_field = options.ring_field;
+      std::unique_ptr<RosbagReader> reader;
+      if (format == ScanInputFormat::kRosbag1) {
+        reader = std::make_unique<Rosbag1Reader>(input);
+      } else {
+        reader = std::make_unique<Rosbag2Reader>(input);
+      }
+      return std::make_unique<RosbagScanSource>(std::move(reader), std::move(b));
+    }
+    case ScanInputFormat::kAuto: break;
+  }
+  throw core::InputError(input + ": cannot tell the input format");
+}
+
+}  // namespace ringtrack::io

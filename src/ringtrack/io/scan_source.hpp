@@ -1,0 +1,45 @@
+#pragma once
+/// Opens any scan input by name: Velodyne pcap/pcapng files and live UDP (velodyne_source.hpp),
+/// ROS 1 bags and ROS 2 bags (VelodyneScan or PointCloud2 topics). See docs/inputs.md.
+
+#include <memory>
+#include <string>
+
+#include "ringtrack/io/pointcloud2.hpp"
+#include "ringtrack/io/velodyne_source.hpp"
+
+namespace ringtrack::io {
+
+/// Any stream of organized scans: the interface the Velodyne inputs share, which knows nothing
+/// of packets (next, model, summary, live).
+using ScanSource = VelodyneScanSource;
+
+/// Kinds of input.
+enum class ScanInputFormat {
+  kAuto,     ///< from the name and contents
+  kPcap,     ///< .pcap / .pcapng capture of Velodyne packets
+  kUdp,      ///< live Velodyne packets: udp://HOST:PORT
+  kRosbag1,  ///< ROS 1 .bag file
+  kRosbag2,  ///< rosbag2 folder or .db3 file
+};
+
+/// Everything an input needs.
+struct ScanSourceOptions {
+  ScanInputFormat format{ScanInputFormat::kAuto};
+  /// Packet decoding, pcap ports, UDP queue and interrupt flag; the decoder's model, scan rate
+  /// and cut azimuth apply to point clouds too.
+  VelodyneSourceOptions velodyne;
+  std::string topic;               ///< bags: the topic (default: the first supported one)
+  std::string ring_field{"ring"};  ///< bags with PointCloud2: the ring field's name
+};
+
+/// Parses a format name: auto, pcap (pcapng), udp, bag (rosbag, rosbag1, ros1), rosbag2 (bag2,
+/// ros2); throws core::ConfigError.
+ScanInputFormat parse_scan_input_format(const std::string& name);
+/// The format an input implies; throws core::InputError when it cannot tell.
+ScanInputFormat guess_scan_input_format(const std::string& input);
+/// Opens an input; throws core::InputError / core::ConfigError naming it.
+std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
+                                             const ScanSourceOptions& options);
+
+}  // namespace ringtrack::io

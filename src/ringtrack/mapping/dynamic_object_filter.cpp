@@ -1,0 +1,178 @@
+#include "ringtrack/mapping/dynamic_object_filter.hpp"
+
+#include <string>
+
+#include "ringtrack/core/error.hpp"
+
+namespace ringtrack::mapping {
+
+std::size_t LoggedScan::remove_inside(const core::Box3& box) {
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!removed[i] && box.contains(points[i])) {
+      removed[i] = 1;
+      ++n;
+    }
+  }
+  removed_count += n;
+  return n;
+}
+
+DynamicObjectFilter::DynamicObjectFilter(const core::MappingConfig& config)
+    : config_(config), map_(config.voxel_size_m) {}
+
+core::Box3 DynamicObjectFilter::inflate(const core::Box3& box) const {
+  const auto m = static_cast<float>(config_.box_margin_m);
+  return {box.min.array() - m, box.max.array() + m};
+}
+
+void DynamicObjectFilter::remove_box(std::uint64_t sequence, const core::Box3& box) {
+  if (box.empty()) return;
+  const core::Box3 grown = inflate(box);
+  if (!log_.empty() && sequence >= log_.front().sequence && sequence <= log_.back().sequence) {
+    result_.retroactive_points += log_[sequence - log_.front().sequence].remove_inside(grown);
+  } else if (log_.empty() || sequence < log_.front().sequence) {
+    // The scan already went into the map: remove the voxels instead.
+    result_.map_voxels_removed += map_.remove_inside(grown);
+  }
+}
+
+void DynamicObjectFilter::release_front() {
+  LoggedScan& scan = log_.front();
+  map_.insert(scan.points, scan.intensities, scan.removed, scan.cells, settled_);
+  released_.push_back(std::move(scan));
+  log_.pop_front();
+  ++result_.scans_to_map;
+  // Static boxes of scans now in the map shrink to one union box per object.
+  const std::uint64_t oldest = log_.empty() ? next_sequence_ : log_.front().sequence;
+  for (auto& [id, object] : objects_) {
+    while (!object.static_boxes.empty() && object.static_boxes.front().sequence < oldest) {
+      object.expired_static.extend(object.static_boxes.front().box);
+      object.static_boxes.pop_front();
+    }
+  }
+}
+
+const FilterResult& DynamicObjectFilter::process(
+    const core::OrganizedScan& scan, const core::Pose& pose,
+    const std::vector<core::Detection>& detections,
+    const std::vector<tracking::Hypothesis>& hypotheses) {
+  for (const auto& h : hypotheses) {
+    if (h.detection >= static_cast<int>(detections.size())) {
+      throw core::InputError("mapping: hypothesis " + std::to_string(h.id) + " names detection " +
+                             std::to_string(h.detection) + " of " +
+                             std::to_string(detections.size()) + "; the filter was left unchanged");
+    }
+  }
+  const std::uint64_t sequence = next_sequence_++;
+  result_ = FilterResult{};
+  result_.sequence = sequence;
+  // Reuse the buffers of a scan released by the previous call: no page faults per scan.
+  LoggedScan logged;
+  if (!released_.empty()) logged = std::move(released_.back());
+  released_.clear();
+
+  // Log the scan's valid points in the world frame.
+  logged.sequence = sequence;
+  logged.stamp_ns = scan.stamp_ns;
+  logged.pose = pose;
+  logged.rings = scan.rings();
+  logged.columns = scan.columns();
+  logged.removed_count = 0;
+  const Eigen::Isometry3d world_from_sensor = pose.isometry();
+  const Eigen::Matrix3f rotation = world_from_sensor.linear().cast<float>();
+  const Eigen::Vector3f translation = world_from_sensor.translation().cast<float>();
+  const std::size_t valid = scan.valid_count();
+  logged.cells.resize(valid);
+  logged.points.resize(valid);
+  logged.intensities.resize(valid);
+  logged.removed.assign(valid, 0);
+  point_of_cell_.assign(scan.size(), -1);
+  const auto& xs = scan.xs();
+  const auto& ys = scan.ys();
+  const auto& zs = scan.zs();
+  const auto& intensities = scan.intensities();
+  std::size_t n = 0;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!scan.valid(i)) continue;
+    point_of_cell_[i] = static_cast<std::int32_t>(n);
+    logged.cells[n] = static_cast<std::uint32_t>(i);
+    logged.points[n] = rotation * Eigen::Vector3f(xs[i], ys[i], zs[i]) + translation;
+    logged.intensities[n] = intensities[i];
+    ++n;
+  }
+  log_.push_back(std::move(logged));
+  LoggedScan& current = log_.back();
+
+  for (const auto& h : hypotheses) {
+    ObjectHistory& object = objects_[h.id];
+    object.touched = sequence;
+    const bool detected = h.detection >= 0;
+    if (!h.ever_dynamic) {
+      // Remember where it stood: these points go if it turns out to be dynamic later.
+      object.static_boxes.push_back({sequence, h.box});
+      if (detected) {
+        object.seen = true;
+        object.last_seen = {sequence, h.box};
+      }
+      continue;
+    }
+    if (!object.ever_dynamic) {
+      // Just turned dynamic: remove it from every scan of its static era.
+      object.ever_dynamic = true;
+      for (const auto& b : object.static_boxes) remove_box(b.sequence, b.box);
+      object.static_boxes.clear();
+      if (!object.expired_static.empty()) {
+        result_.map_voxels_removed += map_.remove_inside(inflate(object.expired_static));
+        object.expired_static = core::Box3{};
+      }
+    }
+    if (!detected) {
+      object.gap.push_back({sequence, h.box});
+      continue;
+    }
+    for (const auto cell : detections[h.detection].indices) {
+      if (cell >= point_of_cell_.size() || point_of_cell_[cell] < 0) continue;
+      const auto p = static_cast<std::size_t>(point_of_cell_[cell]);
+      if (current.removed[p]) continue;
+      current.removed[p] = 1;
+      ++current.removed_count;
+      result_.removed_cells.push_back(cell);
+    }
+    if (!object.gap.empty()) {
+      // Recovered after a gap: its points in the missed scans lie in the predicted boxes or,
+      // when it turned meanwhile, along the straight way from where it was last seen to here.
+      for (const auto& g : object.gap) {
+        remove_box(g.sequence, g.box);
+        if (object.seen && object.last_seen.sequence < g.sequence) {
+          const double t = static_cast<double>(g.sequence - object.last_seen.sequence) /
+                           static_cast<double>(sequence - object.last_seen.sequence);
+          const auto tf = static_cast<float>(t);
+          const core::Box3& a = object.last_seen.box;
+          if (!a.empty() && !h.box.empty()) {
+            remove_box(g.sequence, {(1.0f - tf) * a.min + tf * h.box.min,
+                                    (1.0f - tf) * a.max + tf * h.box.max});
+          }
+        }
+      }
+      object.gap.clear();
+    }
+    object.seen = true;
+    object.last_seen = {sequence, h.box};
+  }
+  // Forget deleted hypotheses.
+  std::erase_if(objects_, [&](const auto& entry) { return entry.second.touched != sequence; });
+
+  while (log_.size() > static_cast<std::size_t>(config_.log_delay_scans)) release_front();
+  return result_;
+}
+
+const FilterResult& DynamicObjectFilter::flush() {
+  result_ = FilterResult{};
+  result_.sequence = next_sequence_ == 0 ? 0 : next_sequence_ - 1;
+  released_.clear();
+  while (!log_.empty()) release_front();
+  return result_;
+}
+
+}  // namespace ringtrack::mapping

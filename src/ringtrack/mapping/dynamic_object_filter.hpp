@@ -1,0 +1,105 @@
+#pragma once
+/// Dynamic-object filter (paper III.E): removes the points of dynamic objects from every scan,
+/// retroactively from a log of recent scans, and feeds the delayed, filtered scans into a
+/// voxel map of the static world.
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <deque>
+#include <unordered_map>
+#include <vector>
+
+#include "ringtrack/core/box3.hpp"
+#include "ringtrack/core/config.hpp"
+#include "ringtrack/core/detection.hpp"
+#include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/core/pose.hpp"
+#include "ringtrack/mapping/static_map.hpp"
+#include "ringtrack/tracking/tracker.hpp"
+
+namespace ringtrack::mapping {
+
+/// One filtered scan: its valid points in the world frame and which of them were removed.
+struct LoggedScan {
+  std::uint64_t sequence{0};  ///< 0 for the first scan processed, then +1 per scan
+  std::int64_t stamp_ns{0};
+  core::Pose pose;  ///< sensor in world for this scan
+  int rings{0};     ///< grid size of the source scan
+  int columns{0};
+  std::vector<std::uint32_t> cells;     ///< grid cell (ring * columns + column) of each point
+  std::vector<Eigen::Vector3f> points;  ///< world frame
+  std::vector<float> intensities;
+  std::vector<std::uint8_t> removed;  ///< 1 = removed as part of a dynamic object
+  std::size_t removed_count{0};
+
+  /// Marks the points inside box removed; returns how many were newly removed.
+  std::size_t remove_inside(const core::Box3& box);
+};
+
+/// What the filter did in one call.
+struct FilterResult {
+  std::uint64_t sequence{0};                 ///< of the scan just processed
+  std::vector<std::uint32_t> removed_cells;  ///< its cells removed (dynamic detections)
+  std::size_t retroactive_points{0};         ///< points removed from earlier scans still in the log
+  std::size_t map_voxels_removed{
+      0};                       ///< voxels removed from the map (decisions too late for the log)
+  std::size_t scans_to_map{0};  ///< scans that left the log into the map
+};
+
+/// Keeps the log and the map; call process() once per scan after Tracker::update().
+class DynamicObjectFilter {
+ public:
+  /// Checks nothing: the config comes validated from core::validate_config.
+  explicit DynamicObjectFilter(const core::MappingConfig& config);
+
+  /// Filters one scan. detections and hypotheses are the tracker's input and output for this
+  /// scan (world frame; Hypothesis::detection indexes detections). Throws core::InputError when
+  /// a hypothesis names a detection that does not exist.
+  const FilterResult& process(const core::OrganizedScan& scan, const core::Pose& pose,
+                              const std::vector<core::Detection>& detections,
+                              const std::vector<tracking::Hypothesis>& hypotheses);
+  /// Moves every logged scan into the map (end of a run).
+  const FilterResult& flush();
+
+  /// The static map.
+  [[nodiscard]] const StaticMap& map() const { return map_; }
+  /// Scans still waiting, oldest first (at most log_delay_scans).
+  [[nodiscard]] const std::deque<LoggedScan>& log() const { return log_; }
+  /// Scans that left the log in the last process() or flush() call, e.g. to write them out.
+  [[nodiscard]] const std::vector<LoggedScan>& released() const { return released_; }
+  /// Hypotheses the filter currently keeps history for.
+  [[nodiscard]] std::size_t tracked_objects() const { return objects_.size(); }
+
+ private:
+  struct BoxAt {
+    std::uint64_t sequence;
+    core::Box3 box;
+  };
+  // History of one hypothesis, bounded by the log window (older static boxes are folded into
+  // one union) and by the tracker's coasting limit (gap boxes).
+  struct ObjectHistory {
+    bool ever_dynamic{false};
+    std::deque<BoxAt> static_boxes;  // boxes while static, for scans still in the log
+    core::Box3 expired_static;       // union of static boxes whose scans are in the map
+    std::vector<BoxAt> gap;          // predicted boxes while a dynamic hypothesis is missed
+    bool seen{false};                // last_seen is valid
+    BoxAt last_seen{0, {}};          // last box with an assigned detection
+    std::uint64_t touched{0};        // sequence of the last scan it appeared in
+  };
+
+  void remove_box(std::uint64_t sequence, const core::Box3& box);
+  [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;
+  void release_front();
+
+  core::MappingConfig config_;
+  StaticMap map_;
+  SettledCells settled_;
+  std::deque<LoggedScan> log_;
+  std::vector<LoggedScan> released_;
+  std::vector<std::int32_t> point_of_cell_;
+  std::unordered_map<std::uint64_t, ObjectHistory> objects_;
+  std::uint64_t next_sequence_{0};
+  FilterResult result_;
+};
+
+}  // namespace ringtrack::mapping

@@ -1,0 +1,65 @@
+#pragma once
+/// The whole per-scan pipeline: segmentation, detection, tracking, dynamic-object filter.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "ringtrack/core/config.hpp"
+#include "ringtrack/core/detection.hpp"
+#include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/core/pose.hpp"
+#include "ringtrack/detection/detector.hpp"
+#include "ringtrack/mapping/dynamic_object_filter.hpp"
+#include "ringtrack/segmentation/segmenter.hpp"
+#include "ringtrack/tracking/tracker.hpp"
+
+namespace ringtrack::pipeline {
+
+/// Wall time of each stage for one scan, in milliseconds.
+struct StageTimes {
+  double segmentation_ms{0};
+  double detection_ms{0};
+  double tracking_ms{0};
+  double mapping_ms{0};
+  double total_ms{0};
+};
+
+/// What one scan produced. The spans point into the pipeline's buffers and stay valid until the
+/// next call to process() or finish().
+struct FrameResult {
+  std::int64_t stamp_ns{0};
+  std::span<const std::uint8_t> segment_labels;     ///< per cell: 1 segment point, 0 not
+  std::span<const core::Detection> detections;      ///< world frame
+  std::span<const tracking::Hypothesis> hypotheses; ///< after this scan's update
+  std::span<const std::uint32_t> removed_cells;     ///< cells removed as dynamic from this scan
+  std::size_t retroactive_points{0};                ///< removed from earlier scans in the log
+  StageTimes times;
+};
+
+/// Runs the stages in order on each scan; one instance per sensor stream.
+class Pipeline {
+ public:
+  explicit Pipeline(const core::Config& config);
+
+  /// Processes one scan taken at `pose` (sensor in world); scans must come in time order.
+  const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& pose);
+  /// Moves the scans still held back by the dynamic-object filter into the static map.
+  void finish();
+
+  /// The static map built so far (complete after finish()).
+  [[nodiscard]] const mapping::StaticMap& static_map() const { return filter_.map(); }
+  [[nodiscard]] const core::Config& config() const { return config_; }
+  [[nodiscard]] const tracking::Tracker& tracker() const { return tracker_; }
+
+ private:
+  core::Config config_;
+  segmentation::Segmenter segmenter_;
+  detection::Detector detector_;
+  tracking::Tracker tracker_;
+  mapping::DynamicObjectFilter filter_;
+  std::vector<std::uint8_t> labels_;
+  FrameResult result_;
+};
+
+}  // namespace ringtrack::pipeline

@@ -1,0 +1,387 @@
+// Dynamic-object filter and static map on hand-built scans: a ring of wall points, people as
+// columns of points, detections taken straight from the known labels, the real tracker between.
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <random>
+#include <tuple>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/mapping/dynamic_object_filter.hpp"
+#include "ringtrack/mapping/static_map.hpp"
+#include "ringtrack/tracking/tracker.hpp"
+#include "support/scripted_detections.hpp"
+
+namespace ringtrack::mapping {
+namespace {
+
+constexpr int kRings = 8;
+constexpr int kColumns = 720;
+constexpr double kWallRadius = 10.0;
+constexpr double kGroundZ = -1.5;  // world frame: people stand here
+constexpr double kPersonRadius = 0.25;
+constexpr double kPersonHeight = 1.75;
+
+struct Person {
+  double x, y;
+  std::uint32_t label;
+};
+
+// A rendered scan with the label of each cell (0 = wall).
+struct Frame {
+  core::OrganizedScan scan;
+  std::vector<std::uint32_t> labels;
+  core::Pose pose;
+};
+
+// The sensor at pose looks along horizontal rays (one per column) at heights
+// kGroundZ + 0.25 * ring in the world frame; each ray hits the nearest person cylinder or the
+// wall, a circle of kWallRadius around the world origin.
+Frame render(const std::vector<Person>& people, const core::Pose& pose) {
+  Frame f{core::OrganizedScan(kRings, kColumns), std::vector<std::uint32_t>(kRings * kColumns, 0),
+          pose};
+  f.scan.stamp_ns = pose.stamp_ns;
+  const Eigen::Isometry3d world_from_sensor = pose.isometry();
+  const Eigen::Isometry3d sensor_from_world = world_from_sensor.inverse();
+  const Eigen::Vector2d o = world_from_sensor.translation().head<2>();
+  for (int c = 0; c < kColumns; ++c) {
+    const double az = 2.0 * std::numbers::pi * c / kColumns;
+    const Eigen::Vector2d dir(std::cos(az), std::sin(az));  // world-frame direction
+    // Wall: |o + t dir| = R.
+    const double b = o.dot(dir);
+    double best = -b + std::sqrt(b * b - (o.squaredNorm() - kWallRadius * kWallRadius));
+    std::uint32_t label = 0;
+    for (const auto& p : people) {
+      const Eigen::Vector2d d = o - Eigen::Vector2d(p.x, p.y);
+      const double bb = d.dot(dir);
+      const double disc = bb * bb - (d.squaredNorm() - kPersonRadius * kPersonRadius);
+      if (disc < 0) continue;
+      const double t = -bb - std::sqrt(disc);
+      if (t > 0 && t < best) {
+        best = t;
+        label = p.label;
+      }
+    }
+    for (int r = 0; r < kRings; ++r) {
+      const double z = kGroundZ + 0.25 * r;
+      const bool on_person = label != 0 && z <= kGroundZ + kPersonHeight;
+      double t = best;
+      if (label != 0 && !on_person) {
+        // Above the person's head: the ray continues to the wall.
+        t = -b + std::sqrt(b * b - (o.squaredNorm() - kWallRadius * kWallRadius));
+      }
+      const Eigen::Vector3d world(o.x() + t * dir.x(), o.y() + t * dir.y(), z);
+      const Eigen::Vector3d local = sensor_from_world * world;
+      f.scan.set_return(r, c, static_cast<float>(local.norm()), on_person ? 80.0f : 20.0f,
+                        local.cast<float>());
+      f.labels[f.scan.index(r, c)] = on_person ? label : 0;
+    }
+  }
+  return f;
+}
+
+// One detection per listed label, straight from the labels (world frame).
+std::vector<core::Detection> detect(const Frame& f, const std::vector<std::uint32_t>& wanted) {
+  std::vector<core::Detection> out;
+  for (const auto label : wanted) {
+    core::Detection d;
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    Eigen::Matrix3d sum2 = Eigen::Matrix3d::Zero();
+    for (std::size_t i = 0; i < f.labels.size(); ++i) {
+      if (f.labels[i] != label) continue;
+      const Eigen::Vector3f p = f.pose.to_world(f.scan.point(i));
+      d.indices.push_back(static_cast<std::uint32_t>(i));
+      d.box.extend(p);
+      sum += p.cast<double>();
+      sum2 += p.cast<double>() * p.cast<double>().transpose();
+    }
+    if (d.indices.empty()) continue;
+    const double n = static_cast<double>(d.indices.size());
+    const Eigen::Vector3d mean = sum / n;
+    d.centroid = mean.cast<float>();
+    Eigen::Matrix3d cov = sum2 / n - mean * mean.transpose();
+    cov.diagonal() = cov.diagonal().cwiseMax(0.03 * 0.03);
+    d.covariance = cov.cast<float>();
+    out.push_back(std::move(d));
+  }
+  return out;
+}
+
+core::Pose sensor_pose(int k) {
+  core::Pose p;
+  p.stamp_ns = testing::scan_stamp_ns(k);
+  p.translation = Eigen::Vector3d(1.0, -0.5, 0.0);
+  p.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitZ()));
+  return p;
+}
+
+// Map points inside an upright cylinder (world frame), above the ground.
+int map_points_in_cylinder(const StaticMap& map, double x, double y, double radius) {
+  int n = 0;
+  map.for_each([&](const MapPoint& p) {
+    if (std::hypot(p.position.x() - x, p.position.y() - y) < radius &&
+        p.position.z() > kGroundZ - 0.01)
+      ++n;
+  });
+  return n;
+}
+
+// Runs a script: positions of each person per scan, and which labels are detected.
+struct ScriptRun {
+  explicit ScriptRun(core::MappingConfig mapping = {})
+      : tracker(core::TrackingConfig{}), filter(mapping) {}
+  const FilterResult& step(const std::vector<Person>& people,
+                           const std::vector<std::uint32_t>& detected) {
+    frame = render(people, sensor_pose(k));
+    detections = detect(frame, detected);
+    const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
+    ++k;
+    return filter.process(frame.scan, frame.pose, detections, hypotheses);
+  }
+  tracking::Tracker tracker;
+  DynamicObjectFilter filter;
+  Frame frame;
+  std::vector<core::Detection> detections;
+  int k{0};
+};
+
+TEST(StaticMap, AveragesPerVoxelAndRemovesInsideBoxes) {
+  StaticMap map(0.5);
+  map.insert({0.1f, 0.1f, 0.1f}, 10.0f);
+  map.insert({0.3f, 0.3f, 0.3f}, 20.0f);  // same voxel
+  map.insert({-0.1f, 0.1f, 0.1f}, 5.0f);  // x < 0: next voxel
+  map.insert({std::nanf(""), 0, 0}, 1.0f);
+  map.insert({1e9f, 0, 0}, 1.0f);
+  EXPECT_EQ(map.size(), 2u);
+  EXPECT_EQ(map.dropped_points(), 2u);
+  const auto pts = map.points();
+  ASSERT_EQ(pts.size(), 2u);
+  bool found = false;
+  for (const auto& p : pts) {
+    if (p.count == 2) {
+      found = true;
+      EXPECT_TRUE(p.position.isApprox(Eigen::Vector3f(0.2f, 0.2f, 0.2f)));
+      EXPECT_FLOAT_EQ(p.intensity, 15.0f);
+    }
+  }
+  EXPECT_TRUE(found);
+  EXPECT_EQ(map.remove_inside({{0.0f, 0.0f, 0.0f}, {0.25f, 0.25f, 0.25f}}), 1u);
+  EXPECT_EQ(map.size(), 1u);
+}
+
+TEST(StaticMap, MatchesANaiveMapUnderRandomInsertsAndRemovals) {
+  // Reference: std::map keyed by the voxel index triple with plain sums.
+  StaticMap map(0.2);
+  std::map<std::tuple<long, long, long>, std::pair<Eigen::Vector3d, int>> reference;
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<float> u(-3.0f, 3.0f);
+  for (int round = 0; round < 20; ++round) {
+    for (int i = 0; i < 2000; ++i) {
+      const Eigen::Vector3f p(u(rng), u(rng), u(rng) * 0.3f);
+      map.insert(p, 1.0f);
+      const auto key = std::make_tuple(std::lround(std::floor(p.x() / 0.2f)),
+                                       std::lround(std::floor(p.y() / 0.2f)),
+                                       std::lround(std::floor(p.z() / 0.2f)));
+      auto& r = reference.try_emplace(key, Eigen::Vector3d::Zero(), 0).first->second;
+      r.first += p.cast<double>();
+      ++r.second;
+    }
+    const Eigen::Vector3f c(u(rng), u(rng), 0.0f);
+    const core::Box3 box{c.array() - 0.7f, c.array() + 0.7f};
+    const std::size_t removed = map.remove_inside(box);
+    std::size_t expected = 0;
+    for (auto it = reference.begin(); it != reference.end();) {
+      if (box.contains((it->second.first / it->second.second).cast<float>())) {
+        it = reference.erase(it);
+        ++expected;
+      } else {
+        ++it;
+      }
+    }
+    EXPECT_EQ(removed, expected);
+    ASSERT_EQ(map.size(), reference.size());
+  }
+  const auto pts = map.points();
+  std::size_t matched = 0;
+  for (const auto& p : pts) {
+    const auto key = std::make_tuple(std::lround(std::floor(p.position.x() / 0.2f)),
+                                     std::lround(std::floor(p.position.y() / 0.2f)),
+                                     std::lround(std::floor(p.position.z() / 0.2f)));
+    const auto it = reference.find(key);
+    if (it == reference.end()) continue;
+    EXPECT_EQ(static_cast<int>(p.count), it->second.second);
+    EXPECT_TRUE(p.position.isApprox((it->second.first / it->second.second).cast<float>(), 1e-4f));
+    ++matched;
+  }
+  EXPECT_EQ(matched, reference.size());
+}
+
+TEST(StaticMap, SettledCellHintsDoNotChangeTheMap) {
+  // The same scans inserted point by point and in batches with per-cell hints, with removals
+  // in between (which invalidate the hints), give identical maps.
+  StaticMap plain(0.1), hinted(0.1);
+  SettledCells settled;
+  std::mt19937_64 rng(5);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  const int cells = 3000;
+  for (int scan = 0; scan < 150; ++scan) {
+    std::vector<Eigen::Vector3f> points;
+    std::vector<float> intensities;
+    std::vector<std::uint32_t> cell_ids;
+    std::vector<std::uint8_t> skip;
+    for (int c = 0; c < cells; ++c) {
+      if (c % 7 == scan % 7) continue;  // some cells invalid in each scan
+      const float a = static_cast<float>(c) * 0.002f;
+      points.emplace_back(5.0f * std::cos(a) + noise(rng), 5.0f * std::sin(a) + noise(rng),
+                          static_cast<float>(c % 16) * 0.1f + noise(rng));
+      intensities.push_back(static_cast<float>(c % 100));
+      cell_ids.push_back(static_cast<std::uint32_t>(c));
+      skip.push_back(c % 11 == 0 ? 1 : 0);
+    }
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      if (!skip[i]) plain.insert(points[i], intensities[i]);
+    }
+    hinted.insert(points, intensities, skip, cell_ids, settled);
+    if (scan % 40 == 39) {
+      const core::Box3 box{{4.0f, 0.0f, -1.0f}, {6.0f, 2.0f, 1.0f}};
+      EXPECT_EQ(plain.remove_inside(box), hinted.remove_inside(box));
+    }
+  }
+  const auto a = plain.points(), b = hinted.points();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    EXPECT_EQ(a[i].count, b[i].count);
+    EXPECT_EQ(a[i].position, b[i].position);
+    EXPECT_EQ(a[i].intensity, b[i].intensity);
+  }
+  // Many voxels settled, so the hinted path skipped points.
+  EXPECT_GT(std::count_if(a.begin(), a.end(),
+                          [](const MapPoint& p) { return p.count == StaticMap::kSettledCount; }),
+            100);
+}
+
+TEST(DynamicObjectFilter, WalkingPersonLeavesNoPointsInTheMap) {
+  ScriptRun run;
+  const Person standing{-3.0, -5.0, 2};
+  std::size_t removed_total = 0;
+  for (int k = 0; k < 80; ++k) {
+    const Person walker{-4.0 + 0.1 * k, 5.0, 1};  // 1 m/s across the scene
+    const auto& r = run.step({walker, standing}, {1, 2});
+    removed_total += r.removed_cells.size();
+  }
+  run.filter.flush();
+  EXPECT_GT(removed_total, 0u);
+  // Nothing left along the walker's path (x from -4 to 3.9 at y = 5)...
+  for (double x = -4.0; x <= 3.9; x += 0.1) {
+    EXPECT_EQ(map_points_in_cylinder(run.filter.map(), x, 5.0, kPersonRadius + 0.05), 0)
+        << "x " << x;
+  }
+  // ...while the standing person and the wall stay.
+  EXPECT_GT(map_points_in_cylinder(run.filter.map(), -3.0, -5.0, kPersonRadius + 0.05), 10);
+  EXPECT_GT(run.filter.map().size(), 1000u);
+}
+
+TEST(DynamicObjectFilter, StandingThenWalkingIsRemovedRetroactively) {
+  for (const int delay : {50, 10}) {  // 10: the standing scans are already in the map
+    core::MappingConfig mapping;
+    mapping.log_delay_scans = delay;
+    ScriptRun run(mapping);
+    std::size_t retro = 0, map_removed = 0;
+    for (int k = 0; k < 70; ++k) {
+      const double x = k < 30 ? 2.0 : 2.0 + 0.1 * (k - 30);  // stands 3 s, then walks
+      const auto& r = run.step({{x, 3.0, 1}}, {1});
+      retro += r.retroactive_points;
+      map_removed += r.map_voxels_removed;
+    }
+    run.filter.flush();
+    ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+    EXPECT_TRUE(run.tracker.hypotheses().front().ever_dynamic);
+    EXPECT_EQ(map_points_in_cylinder(run.filter.map(), 2.0, 3.0, kPersonRadius + 0.05), 0)
+        << "delay " << delay;
+    EXPECT_GT(retro, 0u) << "delay " << delay;
+    if (delay == 10) {
+      EXPECT_GT(map_removed, 0u);
+    }
+  }
+}
+
+TEST(DynamicObjectFilter, LostAndRecoveredDynamicObjectIsRemovedInTheGap) {
+  ScriptRun run;
+  for (int k = 0; k < 60; ++k) {
+    const Person walker{-3.0 + 0.1 * k, 4.0, 1};
+    // The detector misses the walker for 0.5 s although its points are in the scans.
+    const bool missed = k >= 30 && k < 35;
+    const auto& r =
+        run.step({walker}, missed ? std::vector<std::uint32_t>{} : std::vector<std::uint32_t>{1});
+    if (missed) {
+      EXPECT_TRUE(r.removed_cells.empty());
+    }
+  }
+  run.filter.flush();
+  ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+  for (int k = 28; k < 37; ++k) {
+    EXPECT_EQ(map_points_in_cylinder(run.filter.map(), -3.0 + 0.1 * k, 4.0, kPersonRadius + 0.05),
+              0)
+        << "k " << k;
+  }
+}
+
+TEST(DynamicObjectFilter, RemovedCellsAreTheDynamicDetections) {
+  ScriptRun run;
+  for (int k = 0; k < 20; ++k) {
+    const auto& r = run.step({{-2.0 + 0.1 * k, -2.0, 1}, {3.0, 3.0, 2}}, {1, 2});
+    const auto& hs = run.tracker.hypotheses();
+    std::vector<std::uint32_t> expected;
+    for (const auto& h : hs) {
+      if (h.ever_dynamic && h.detection >= 0) expected = run.detections[h.detection].indices;
+    }
+    auto got = r.removed_cells;
+    std::sort(got.begin(), got.end());
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(got, expected) << "scan " << k;
+  }
+}
+
+TEST(DynamicObjectFilter, MemoryStaysBoundedOnALongStaticRun) {
+  core::MappingConfig mapping;
+  mapping.log_delay_scans = 30;
+  ScriptRun run(mapping);
+  std::size_t map_size = 0;
+  for (int k = 0; k < 2000; ++k) {
+    const auto& r = run.step({{3.0, 0.0, 1}, {-2.0, 4.0, 2}}, {1, 2});
+    EXPECT_LE(run.filter.log().size(), 30u);
+    if (k >= 30) {
+      EXPECT_EQ(run.filter.log().size(), 30u);
+      EXPECT_EQ(r.scans_to_map, 1u);
+      ASSERT_EQ(run.filter.released().size(), 1u);
+      EXPECT_EQ(run.filter.released().front().sequence, static_cast<std::uint64_t>(k - 30));
+    }
+    if (k == 40) map_size = run.filter.map().size();
+    if (k > 40) {
+      ASSERT_EQ(run.filter.map().size(), map_size) << "scan " << k;
+    }
+  }
+  EXPECT_EQ(run.filter.tracked_objects(), 2u);
+  EXPECT_GT(map_size, 0u);
+  run.filter.flush();
+  EXPECT_TRUE(run.filter.log().empty());
+  EXPECT_EQ(run.filter.released().size(), 30u);
+  EXPECT_EQ(run.filter.map().size(), map_size);
+}
+
+TEST(DynamicObjectFilter, RejectsHypothesesNamingMissingDetections) {
+  DynamicObjectFilter filter{core::MappingConfig{}};
+  const Frame f = render({}, sensor_pose(0));
+  tracking::Hypothesis h;
+  h.id = 1;
+  h.detection = 3;
+  EXPECT_THROW(filter.process(f.scan, f.pose, {}, {h}), core::InputError);
+}
+
+}  // namespace
+}  // namespace ringtrack::mapping
