@@ -1,5 +1,5 @@
-// `ringtrack convert`: decodes a Velodyne input (pcap/pcapng, ROS 2 bag, live UDP) into a
-// sequence folder of organized PCD scans (docs/formats.md, docs/vlp16.md).
+// `ringtrack convert`: decodes an input (Velodyne pcap/pcapng, live UDP, ROS 1 or ROS 2 bag) into
+// a sequence folder of organized PCD scans (docs/inputs.md, docs/formats.md, docs/vlp16.md).
 
 #include <atomic>
 #include <csignal>
@@ -10,15 +10,17 @@
 
 #include "commands.hpp"
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/sequence.hpp"
-#include "ringtrack/io/velodyne_source.hpp"
 
 namespace ringtrack::cli {
 namespace {
 
 std::atomic<bool> g_interrupted{false};
 
-extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+extern "C" void on_convert_interrupt(int) {
+  g_interrupted.store(true);
+}
 
 struct ConvertOptions {
   std::string input;
@@ -29,6 +31,7 @@ struct ConvertOptions {
   std::string time_source{"host"};
   std::string encoding{"binary_compressed"};
   std::string topic;
+  std::string ring_field{"ring"};
   double cut_azimuth_deg{0.0};
   double scan_rate_hz{10.0};
   int port{2368};
@@ -49,25 +52,27 @@ io::PcdEncoding parse_encoding(const std::string& name) {
 void run_convert(const ConvertOptions& o) {
   if (o.out.empty()) throw core::ConfigError("convert: --out DIR is required");
   if (o.port < 1 || o.port > 65535) throw core::ConfigError("convert: --port must be 1..65535");
-  io::VelodyneSourceOptions options;
-  options.format = io::parse_velodyne_input_format(o.format);
-  options.decoder.model = o.model;
-  options.decoder.return_selection = io::parse_velodyne_return_selection(o.return_selection);
-  options.decoder.time_source = io::parse_velodyne_time_source(o.time_source);
-  options.decoder.cut_azimuth_deg = o.cut_azimuth_deg;
-  options.decoder.scan_rate_hz = o.scan_rate_hz;
-  options.decoder.keep_partial_scans = o.keep_partial;
-  options.pcap.data_port = static_cast<std::uint16_t>(o.port);
+  io::ScanSourceOptions options;
+  options.format = io::parse_scan_input_format(o.format);
   options.topic = o.topic;
-  options.interrupt = &g_interrupted;
+  options.ring_field = o.ring_field;
+  io::VelodyneSourceOptions& velodyne = options.velodyne;
+  velodyne.decoder.model = o.model;
+  velodyne.decoder.return_selection = io::parse_velodyne_return_selection(o.return_selection);
+  velodyne.decoder.time_source = io::parse_velodyne_time_source(o.time_source);
+  velodyne.decoder.cut_azimuth_deg = o.cut_azimuth_deg;
+  velodyne.decoder.scan_rate_hz = o.scan_rate_hz;
+  velodyne.decoder.keep_partial_scans = o.keep_partial;
+  velodyne.pcap.data_port = static_cast<std::uint16_t>(o.port);
+  velodyne.interrupt = &g_interrupted;
   io::SequenceWriteOptions write_options;
   write_options.encoding = parse_encoding(o.encoding);
   write_options.ground_truth = false;
   write_options.overwrite = o.overwrite;
 
-  auto source = io::open_velodyne_source(o.input, options);
+  auto source = io::open_scan_source(o.input, options);
   g_interrupted.store(false);
-  const auto previous = std::signal(SIGINT, on_interrupt);
+  const auto previous = std::signal(SIGINT, on_convert_interrupt);
   if (source->live() && !o.quiet) {
     std::cerr << "ringtrack convert: recording " << o.input << ", Ctrl-C to stop\n";
   }
@@ -107,14 +112,17 @@ void run_convert(const ConvertOptions& o) {
 void register_convert(CLI::App& app) {
   auto options = std::make_shared<ConvertOptions>();
   CLI::App* cmd = app.add_subcommand(
-      "convert", "Decode Velodyne packets (pcap/pcapng, ROS 2 bag, udp://HOST:PORT) into a "
-                 "sequence folder of organized PCD scans");
-  cmd->add_option("input", options->input, "pcap/pcapng file, rosbag2 folder or .db3, or udp://HOST:PORT")
+      "convert",
+      "Decode a recording or live sensor (Velodyne pcap/pcapng, udp://HOST:PORT, "
+      "ROS 1 .bag, ROS 2 bag) into a sequence folder of organized PCD scans");
+  cmd->add_option("input", options->input,
+                  "pcap/pcapng file, udp://HOST:PORT, ROS 1 .bag file, rosbag2 folder or .db3")
       ->required();
   cmd->add_option("--out", options->out, "sequence folder to write")->required();
-  cmd->add_option("--format", options->format, "auto | pcap | rosbag2 | udp");
+  cmd->add_option("--format", options->format, "auto | pcap | udp | bag (ROS 1) | rosbag2");
   cmd->add_option("--model", options->model,
-                  "vlp16 | vlp32c | hdl32e (default: from the packets' product byte)");
+                  "vlp16 | vlp32c | hdl32e (default: from the packets' product byte; point "
+                  "clouds: vlp16 up to 16 rings)");
   cmd->add_option("--return", options->return_selection,
                   "which return fills a cell: auto | strongest | last");
   cmd->add_option("--cut-azimuth", options->cut_azimuth_deg,
@@ -123,7 +131,11 @@ void register_convert(CLI::App& app) {
   cmd->add_option("--scan-rate", options->scan_rate_hz, "revolutions per second (rpm / 60)");
   cmd->add_option("--time-source", options->time_source, "host | sensor (GPS-synchronised)");
   cmd->add_option("--port", options->port, "UDP port of data packets in a pcap");
-  cmd->add_option("--topic", options->topic, "ROS 2 bag topic (default: the VelodyneScan topic)");
+  cmd->add_option("--topic", options->topic,
+                  "bag topic, velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2 (default: the "
+                  "first one with messages)");
+  cmd->add_option("--ring-field", options->ring_field,
+                  "PointCloud2 topics: the field holding each point's ring (0 = bottom)");
   cmd->add_option("--encoding", options->encoding, "binary_compressed | binary | ascii");
   cmd->add_option("--max-scans", options->max_scans, "stop after this many scans (0: all)");
   cmd->add_flag("--keep-partial", options->keep_partial,

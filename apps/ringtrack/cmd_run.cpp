@@ -1,7 +1,9 @@
 // `ringtrack run INPUT --out DIR`: the whole pipeline over a recorded sequence, with its outputs.
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -14,6 +16,8 @@
 #include "ringtrack/io/output_file.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/ply.hpp"
+#include "ringtrack/io/poses.hpp"
+#include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/sequence.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 
@@ -22,9 +26,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Set by Ctrl-C: the run stops after the current scan and closes every output properly.
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+
 struct RunOptions {
   std::string input;
   std::string out;
+  std::string format{"auto"};
+  std::string topic;
   std::string poses;
   std::string poses_format{"tum"};
   bool filtered_scans{false};
@@ -64,6 +74,18 @@ double percentile(std::vector<double> values, double q) {
   return values[k];
 }
 
+// One status line on stderr: scans done, rate and, when the total is known, the time left.
+void print_progress(std::size_t done, std::size_t total, std::chrono::steady_clock::time_point start) {
+  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  const double rate = s > 0 ? static_cast<double>(done) / s : 0.0;
+  if (total > 0) {
+    const double eta = rate > 0 ? static_cast<double>(total - done) / rate : 0.0;
+    std::fprintf(stderr, "\rscan %zu / %zu  %.0f scans/s  ETA %.0f s   ", done, total, rate, eta);
+  } else {
+    std::fprintf(stderr, "\rscan %zu  %.0f scans/s   ", done, rate);
+  }
+}
+
 // The scan with the cells the filter removed marked invalid: what the static map was built from.
 core::OrganizedScan without_cells(const core::OrganizedScan& scan, std::span<const std::uint32_t> cells) {
   core::OrganizedScan out = scan;
@@ -71,15 +93,78 @@ core::OrganizedScan without_cells(const core::OrganizedScan& scan, std::span<con
   return out;
 }
 
+// Scans with their poses, from a sequence folder / PCD folder or from a sensor recording or stream.
+class RunInput {
+ public:
+  explicit RunInput(const RunOptions& o) {
+    if (std::filesystem::is_directory(o.input) && !is_rosbag2_folder(o.input) && o.format == "auto") {
+      io::SequenceReadOptions read_options;
+      if (!o.poses.empty()) {
+        read_options.poses = o.poses;
+        read_options.poses_format =
+            o.poses_format == "kitti" ? io::PoseFileFormat::kKitti : io::PoseFileFormat::kTum;
+      }
+      sequence_ = std::make_unique<io::SequenceReader>(o.input, read_options);
+      if (sequence_->size() == 0) throw core::InputError(o.input + ": no scans found");
+      return;
+    }
+    io::ScanSourceOptions source_options;
+    source_options.format = io::parse_scan_input_format(o.format);
+    source_options.topic = o.topic;
+    source_options.velodyne.interrupt = &g_interrupted;
+    source_ = io::open_scan_source(o.input, source_options);
+    if (!o.poses.empty()) {
+      if (o.poses_format != "tum") {
+        throw core::InputError(o.poses + ": only TUM poses (with stamps) can be matched to a sensor recording");
+      }
+      trajectory_ = io::read_tum(o.poses);
+    }
+  }
+
+  /// The next scan and its pose; false at the end.
+  bool next(std::size_t& index, core::OrganizedScan& scan, core::Pose& pose) {
+    if (sequence_) {
+      if (!sequence_->next(item_)) return false;
+      index = item_.index;
+      scan = std::move(item_.scan);
+      pose = item_.pose;
+      return true;
+    }
+    auto next_scan = source_->next();
+    if (!next_scan) return false;
+    index = count_++;
+    scan = std::move(*next_scan);
+    pose = core::Pose{};
+    pose.stamp_ns = scan.stamp_ns;
+    if (!trajectory_.empty()) {
+      if (!trajectory_.covers(scan.stamp_ns)) {
+        throw core::InputError("--poses: no pose around scan " + std::to_string(index) + " at stamp " +
+                               std::to_string(scan.stamp_ns) + " ns");
+      }
+      pose = trajectory_.at(scan.stamp_ns);
+    }
+    return true;
+  }
+  /// Number of scans when known in advance (0 for recordings and streams).
+  [[nodiscard]] std::size_t size() const { return sequence_ ? sequence_->size() : 0; }
+  /// What the source counted (packets, drops, ...), empty for sequence folders.
+  [[nodiscard]] std::string summary() const { return source_ ? source_->summary() : std::string(); }
+
+ private:
+  static bool is_rosbag2_folder(const std::string& path) {
+    return std::filesystem::exists(std::filesystem::path(path) / "metadata.yaml");
+  }
+
+  std::unique_ptr<io::SequenceReader> sequence_;
+  std::unique_ptr<io::ScanSource> source_;
+  io::Trajectory trajectory_;
+  io::SequenceScan item_;
+  std::size_t count_{0};
+};
+
 void run(const RunOptions& o) {
   const core::Config config = o.config.load();
-  io::SequenceReadOptions read_options;
-  if (!o.poses.empty()) {
-    read_options.poses = o.poses;
-    read_options.poses_format = o.poses_format == "kitti" ? io::PoseFileFormat::kKitti : io::PoseFileFormat::kTum;
-  }
-  io::SequenceReader reader(o.input, read_options);
-  if (reader.size() == 0) throw core::InputError(o.input + ": no scans found");
+  RunInput input(o);
 
   const fs::path out = o.out;
   std::error_code ec;
@@ -98,26 +183,33 @@ void run(const RunOptions& o) {
   std::vector<double> total_ms;
   std::set<std::uint64_t> track_ids, dynamic_ids;
   const bool progress = !o.quiet && isatty(STDERR_FILENO);
-  io::SequenceScan item;
+  const auto start = std::chrono::steady_clock::now();
+  std::size_t index = 0;
+  core::OrganizedScan scan;
+  core::Pose pose;
   std::vector<io::TrackRow> rows;
-  while (reader.next(item)) {
-    const auto& result = pipeline.process(item.scan, item.pose);
+  g_interrupted.store(false);
+  const auto previous_handler = std::signal(SIGINT, on_interrupt);
+  while (!g_interrupted.load() && input.next(index, scan, pose)) {
+    const auto& result = pipeline.process(scan, pose);
     rows.clear();
     for (const auto& h : result.hypotheses) {
-      rows.push_back(track_row(item.index, item.scan.stamp_ns, h));
+      rows.push_back(track_row(index, scan.stamp_ns, h));
       track_ids.insert(h.id);
       if (h.ever_dynamic) dynamic_ids.insert(h.id);
     }
     tracks.write(rows);
-    timing.write(timing_row(item.index, item.scan.stamp_ns, result.times));
+    timing.write(timing_row(index, scan.stamp_ns, result.times));
     total_ms.push_back(result.times.total_ms);
     if (o.filtered_scans) {
       char name[32];
-      std::snprintf(name, sizeof name, "%06zu.pcd", item.index);
-      io::write_pcd(out / "filtered" / name, without_cells(item.scan, result.removed_cells), {});
+      std::snprintf(name, sizeof name, "%06zu.pcd", index);
+      io::write_pcd(out / "filtered" / name, without_cells(scan, result.removed_cells), {});
     }
-    if (progress) std::fprintf(stderr, "\rscan %zu / %zu", item.index + 1, reader.size());
+    if (progress) print_progress(index + 1, input.size(), start);
   }
+  std::signal(SIGINT, previous_handler);
+  if (total_ms.empty()) throw core::InputError(o.input + ": no scans found");
   if (progress) std::fprintf(stderr, "\n");
   pipeline.finish();
   tracks.close();
@@ -134,7 +226,9 @@ void run(const RunOptions& o) {
   }
   io::write_ply(out / "static_map.ply", xyz, intensity);
 
-  std::printf("scans            %zu\n", total_ms.size());
+  if (const auto summary = input.summary(); !summary.empty()) std::printf("input            %s\n", summary.c_str());
+  std::printf("scans            %zu%s\n", total_ms.size(),
+              g_interrupted.load() ? " (interrupted: the outputs cover these scans only)" : "");
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
   std::printf("static map       %zu voxels\n", map_points.size());
   std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", percentile(total_ms, 0.5),
@@ -148,10 +242,14 @@ void run(const RunOptions& o) {
 void register_run(CLI::App& app) {
   auto* cmd = app.add_subcommand("run", "run the pipeline over a sequence folder or a folder of organized PCD files");
   auto o = std::make_shared<RunOptions>();
-  cmd->add_option("input", o->input, "sequence folder (docs/formats.md) or folder of organized PCD files")
+  cmd->add_option("input", o->input,
+                  "sequence folder or folder of organized PCD files (docs/formats.md), .pcap/.pcapng, "
+                  ".bag, rosbag2 folder, or udp://HOST:PORT (docs/inputs.md)")
       ->required();
+  cmd->add_option("--format", o->format, "input format: auto (from the name), pcap, udp, rosbag1, rosbag2");
+  cmd->add_option("--topic", o->topic, "bag topic (default: the first supported one)");
   cmd->add_option("--out", o->out, "output folder (created)")->required();
-  cmd->add_option("--poses", o->poses, "sensor poses (sensor in world) replacing the folder's poses.txt")
+  cmd->add_option("--poses", o->poses, "sensor poses (sensor in world; replaces a sequence's poses.txt)")
       ->check(CLI::ExistingFile);
   cmd->add_option("--poses-format", o->poses_format, "tum (t x y z qx qy qz qw) or kitti (3x4 per scan)")
       ->check(CLI::IsMember({"tum", "kitti"}));

@@ -26,5 +26,6 @@ void register_run(CLI::App& app);
 void register_eval(CLI::App& app);
 void register_simulate(CLI::App& app);
 void register_convert(CLI::App& app);
+void register_benchmark(CLI::App& app);
 
 }  // namespace ringtrack::cli

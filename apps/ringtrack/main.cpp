@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   ringtrack::cli::register_eval(app);
   ringtrack::cli::register_simulate(app);
   ringtrack::cli::register_convert(app);
+  ringtrack::cli::register_benchmark(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

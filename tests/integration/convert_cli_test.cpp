@@ -20,7 +20,8 @@ using testing::run_command;
 const std::string kCli = RINGTRACK_CLI_PATH;
 
 fs::path data_dir() {
-  if (const char* env = std::getenv("RINGTRACK_TEST_DATA")) return fs::path(env) / "vlp16_indoor_nebula";
+  if (const char* env = std::getenv("RINGTRACK_TEST_DATA"))
+    return fs::path(env) / "vlp16_indoor_nebula";
   return fs::path(RINGTRACK_SOURCE_DIR) / ".." / "shared" / "data" / "vlp16_indoor_nebula";
 }
 
@@ -31,7 +32,8 @@ TEST(ConvertCli, SyntheticPcapRoundTripsThroughTheSequenceFolder) {
   eo.start_azimuth_deg = 30.0;
   const test::VelodyneEncoder enc(eo);
   const auto packets = enc.encode(0, 500, [](long long s, int laser) {
-    return test::VelodyneEchoPair{{static_cast<std::uint16_t>(900 + (s * 3 + laser) % 4000), 9}, {}};
+    return test::VelodyneEchoPair{{static_cast<std::uint16_t>(900 + (s * 3 + laser) % 4000), 9},
+                                  {}};
   });
   const std::string pcap = dir + "/synthetic.pcapng";
   test::write_pcapng(pcap, test::PcapLink::kEthernet,

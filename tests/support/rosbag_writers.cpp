@@ -68,7 +68,9 @@ void field(std::vector<std::uint8_t>& b, const std::string& name,
   b.insert(b.end(), value.begin(), value.end());
 }
 
-std::vector<std::uint8_t> v8(std::uint8_t v) { return {v}; }
+std::vector<std::uint8_t> v8(std::uint8_t v) {
+  return {v};
+}
 std::vector<std::uint8_t> v32(std::uint32_t v) {
   std::vector<std::uint8_t> b;
   put32(b, v);
@@ -85,7 +87,9 @@ std::vector<std::uint8_t> vtime(std::int64_t ns) {
   put_time(b, ns);
   return b;
 }
-std::vector<std::uint8_t> vstr(const std::string& s) { return {s.begin(), s.end()}; }
+std::vector<std::uint8_t> vstr(const std::string& s) {
+  return {s.begin(), s.end()};
+}
 
 // A record: header length, header, data length, data.
 void record(std::vector<std::uint8_t>& out, const std::vector<std::uint8_t>& header,
@@ -322,18 +326,19 @@ void write_rosbag2(const std::filesystem::path& folder, const std::vector<TestBa
     }
   };
   check(sqlite3_open(file.string().c_str(), &db), "open");
-  check(sqlite3_exec(db,
-                     "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT "
-                     "NULL);"
-                     "INSERT INTO schema VALUES(3, 'humble');"
-                     "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT "
-                     "NULL, serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT "
-                     "NULL);"
-                     "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, "
-                     "timestamp INTEGER NOT NULL, data BLOB NOT NULL);"
-                     "CREATE INDEX timestamp_idx ON messages (timestamp ASC);",
-                     nullptr, nullptr, nullptr),
-        "schema");
+  check(
+      sqlite3_exec(db,
+                   "CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT "
+                   "NULL);"
+                   "INSERT INTO schema VALUES(3, 'humble');"
+                   "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT "
+                   "NULL, serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT "
+                   "NULL);"
+                   "CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, "
+                   "timestamp INTEGER NOT NULL, data BLOB NOT NULL);"
+                   "CREATE INDEX timestamp_idx ON messages (timestamp ASC);",
+                   nullptr, nullptr, nullptr),
+      "schema");
   sqlite3_stmt* stmt = nullptr;
   check(sqlite3_prepare_v2(db, "INSERT INTO topics VALUES(?, ?, ?, 'cdr', '')", -1, &stmt, nullptr),
         "prepare topics");
@@ -366,8 +371,8 @@ void write_rosbag2(const std::filesystem::path& folder, const std::vector<TestBa
     << "  duration:\n    nanoseconds: 0\n  starting_time:\n    nanoseconds_since_epoch: 0\n"
     << "  message_count: " << messages.size() << "\n  topics_with_message_count:\n";
   for (std::size_t t = 0; t < topics.size(); ++t) {
-    y << "    - topic_metadata:\n        name: " << topics[t].name << "\n        type: "
-      << topics[t].type << "\n        serialization_format: cdr\n"
+    y << "    - topic_metadata:\n        name: " << topics[t].name
+      << "\n        type: " << topics[t].type << "\n        serialization_format: cdr\n"
       << "        offered_qos_profiles: \"\"\n      message_count: " << counts[t] << "\n";
   }
   y << "  compression_format: \"\"\n  compression_mode: \"\"\n";

@@ -61,11 +61,12 @@ struct TestPoint {
 /// A cloud of height x width points with fields x y z intensity (float32, offsets 0..12), ring
 /// (uint16, 16) and time (float32, 18) in 24-byte records; `points` row-major.
 TestPointCloud2 make_xyzirt_cloud(const std::vector<TestPoint>& points, std::uint32_t height,
-                                  std::uint32_t width, std::int64_t stamp_ns,
-                                  bool with_ring = true, bool with_time = true);
+                                  std::uint32_t width, std::int64_t stamp_ns, bool with_ring = true,
+                                  bool with_time = true);
 
 /// Serializes a VelodyneScan (CDR: little endian, with the encapsulation header).
-std::vector<std::uint8_t> serialize_velodyne_scan(const TestVelodyneScan& scan, RosEncoding encoding);
+std::vector<std::uint8_t> serialize_velodyne_scan(const TestVelodyneScan& scan,
+                                                  RosEncoding encoding);
 /// Serializes a PointCloud2 (CDR: little endian, with the encapsulation header).
 std::vector<std::uint8_t> serialize_pointcloud2(const TestPointCloud2& cloud, RosEncoding encoding);
 /// Serializes a std_msgs/String.

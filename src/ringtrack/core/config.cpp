@@ -190,6 +190,15 @@ class Schema {
     number("process_noise", t.process_noise, 1e-9, 1e6,
            "spectral density q of the white acceleration driving the constant-velocity model "
            "(m^2/s^3)");
+    choice("vertical_motion", t.vertical_motion,
+           {{"constant_position", VerticalMotion::kConstantPosition},
+            {"constant_velocity", VerticalMotion::kConstantVelocity}},
+           "height model of a hypothesis: constant_position holds the vertical velocity at zero "
+           "(people, ground robots: the centroid's height jumps with the rings that hit them), "
+           "constant_velocity treats z like x and y (drones)");
+    number("vertical_position_noise", t.vertical_position_noise, 0.0, 1e6,
+           "vertical_motion = constant_position: the height is a random walk of this density "
+           "(m^2/s), so it follows the rings that hit the object without a velocity to drift on");
     number("initial_velocity_stddev_mps", t.initial_velocity_stddev_mps, 1e-6, 1e3,
            "standard deviation of a new hypothesis' velocity (m/s); its mean is zero");
     number("measurement_covariance_scale", t.measurement_covariance_scale, 1e-6, 1e6,
@@ -207,6 +216,9 @@ class Schema {
     number("dynamic_min_distance_m", t.dynamic_min_distance_m, 0.0, 100.0,
            "a hypothesis turns dynamic when its footprint no longer intersects its initial "
            "footprint and its position has moved at least this far (m)");
+    integer("dynamic_confirm_scans", t.dynamic_confirm_scans, 1, 1000000,
+            "the footprint and distance test must hold in this many consecutive scans with a "
+            "strict (not relaxed) detection before a hypothesis turns dynamic");
     integer("rest_scans_to_static", t.rest_scans_to_static, 0, 1000000,
             "a dynamic hypothesis whose reported speed stays zero this many scans is static again "
             "(ever_dynamic stays set); 0 = dynamic forever");

@@ -51,6 +51,12 @@ enum class AssociationCost {
   kEuclidean,      ///< 3-D distance between the predicted position and the centroid
 };
 
+/// How a hypothesis' height evolves.
+enum class VerticalMotion {
+  kConstantPosition,  ///< vertical velocity held at zero: walkers and ground robots
+  kConstantVelocity,  ///< like the horizontal axes: flying objects
+};
+
 /// Multi-object tracking (paper III.D): constant-velocity Kalman filters in the world frame,
 /// Hungarian assignment with a gate, hypothesis lifecycle and static/dynamic classification.
 struct TrackingConfig {
@@ -59,6 +65,9 @@ struct TrackingConfig {
   double gate_mahalanobis{4.0};    // ... above this Mahalanobis distance (sigmas)
   double gate_euclidean_m{1.0};    // ... above this distance (m)
   double process_noise{0.2};       // white-acceleration spectral density q (m^2/s^3)
+  VerticalMotion vertical_motion{VerticalMotion::kConstantVelocity};  // z like x and y: the
+                                   // centroid height drifts as rings sweep an approaching person
+  double vertical_position_noise{0.5};  // constant_position: z random-walk density (m^2/s)
   double initial_velocity_stddev_mps{1.5};  // velocity prior of a new hypothesis
   double measurement_covariance_scale{1.0};  // detection covariance times this is the noise R
   double delete_eigenvalue_m2{1.0};  // delete when a position-covariance eigenvalue exceeds this
@@ -66,6 +75,7 @@ struct TrackingConfig {
   double min_speed_kmh{1.0};       // reported speeds up to this are reported as zero
   double max_speed_kmh{10.0};      // speeds are capped here (state and report)
   double dynamic_min_distance_m{0.3};  // besides disjoint footprints, the centre must move this far
+  int dynamic_confirm_scans{1};    // ... in this many consecutive strict detections
   int rest_scans_to_static{30};    // dynamic hypotheses at rest this long turn static (0 = never)
 };
 

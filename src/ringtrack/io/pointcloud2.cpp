@@ -54,13 +54,17 @@ std::int64_t point_time_ns(const PointField& field, double value, std::int64_t h
 std::size_t point_field_type_bytes(std::uint8_t datatype) {
   switch (static_cast<PointFieldType>(datatype)) {
     case PointFieldType::kInt8:
-    case PointFieldType::kUint8: return 1;
+    case PointFieldType::kUint8:
+      return 1;
     case PointFieldType::kInt16:
-    case PointFieldType::kUint16: return 2;
+    case PointFieldType::kUint16:
+      return 2;
     case PointFieldType::kInt32:
     case PointFieldType::kUint32:
-    case PointFieldType::kFloat32: return 4;
-    case PointFieldType::kFloat64: return 8;
+    case PointFieldType::kFloat32:
+      return 4;
+    case PointFieldType::kFloat64:
+      return 8;
   }
   return 0;
 }
@@ -76,20 +80,28 @@ double PointCloud2::value(const PointField& field, std::uint32_t row, std::uint3
   const std::uint8_t* p = data.data() + static_cast<std::size_t>(row) * row_step +
                           static_cast<std::size_t>(column) * point_step + field.offset;
   switch (static_cast<PointFieldType>(field.datatype)) {
-    case PointFieldType::kInt8: return load<std::int8_t>(p);
-    case PointFieldType::kUint8: return load<std::uint8_t>(p);
-    case PointFieldType::kInt16: return load<std::int16_t>(p);
-    case PointFieldType::kUint16: return load<std::uint16_t>(p);
-    case PointFieldType::kInt32: return load<std::int32_t>(p);
-    case PointFieldType::kUint32: return load<std::uint32_t>(p);
-    case PointFieldType::kFloat32: return load<float>(p);
-    case PointFieldType::kFloat64: return load<double>(p);
+    case PointFieldType::kInt8:
+      return load<std::int8_t>(p);
+    case PointFieldType::kUint8:
+      return load<std::uint8_t>(p);
+    case PointFieldType::kInt16:
+      return load<std::int16_t>(p);
+    case PointFieldType::kUint16:
+      return load<std::uint16_t>(p);
+    case PointFieldType::kInt32:
+      return load<std::int32_t>(p);
+    case PointFieldType::kUint32:
+      return load<std::uint32_t>(p);
+    case PointFieldType::kFloat32:
+      return load<float>(p);
+    case PointFieldType::kFloat64:
+      return load<double>(p);
   }
   return std::numeric_limits<double>::quiet_NaN();
 }
 
-PointCloud2 parse_pointcloud2(std::span<const std::uint8_t> message,
-                              RosSerialization serialization, const std::string& where) {
+PointCloud2 parse_pointcloud2(std::span<const std::uint8_t> message, RosSerialization serialization,
+                              const std::string& where) {
   RosMessageCursor in(message, serialization, where + ": PointCloud2");
   PointCloud2 c;
   c.stamp_ns = in.header_stamp_ns(&c.frame_id);
@@ -274,8 +286,8 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
       // The measured distance: the driver's own, else from the beam origin (the point less the
       // ring's vertical offset), as the packet decoder reports it.
       const double dz = z - model.vertical_offset_m[r];
-      const double range =
-          fdistance != nullptr ? cloud.value(*fdistance, row, col) : std::sqrt(x * x + y * y + dz * dz);
+      const double range = fdistance != nullptr ? cloud.value(*fdistance, row, col)
+                                                : std::sqrt(x * x + y * y + dz * dz);
       if (!std::isfinite(range) || range <= 0.0) {
         ++stats_.empty_points;
         continue;
@@ -293,8 +305,8 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
         scan.column_azimuth_rad[c] = velodyne_to_ringtrack_azimuth_rad(velodyne_deg);
       }
       if (ftime != nullptr) {
-        first_ns[c] = std::min(first_ns[c], point_time_ns(*ftime, cloud.value(*ftime, row, col),
-                                                          cloud.stamp_ns));
+        first_ns[c] = std::min(
+            first_ns[c], point_time_ns(*ftime, cloud.value(*ftime, row, col), cloud.stamp_ns));
       }
       const std::size_t i = scan.index(ring, column);
       const auto range_f = static_cast<float>(range);
@@ -304,16 +316,16 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
       }
       if (range_f < min_range || range_f > max_range) {
         if (!scan.valid(i)) {
-          scan.set_invalid(ring, column,
-                           range_f < min_range ? core::ReturnStatus::kTooClose
-                                               : core::ReturnStatus::kTooFar);
+          scan.set_invalid(
+              ring, column,
+              range_f < min_range ? core::ReturnStatus::kTooClose : core::ReturnStatus::kTooFar);
         }
         continue;
       }
       const float intensity = fi != nullptr ? static_cast<float>(cloud.value(*fi, row, col)) : 0.0f;
-      scan.set_return(ring, column, range_f, intensity,
-                      Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y),
-                                      static_cast<float>(z)));
+      scan.set_return(
+          ring, column, range_f, intensity,
+          Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)));
     }
   }
   // Columns without points: nominal azimuths; stamps continued from the nearest timed column at

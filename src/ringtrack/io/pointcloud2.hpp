@@ -60,16 +60,16 @@ struct PointCloud2 {
 /// Parses a serialized sensor_msgs/PointCloud2 and checks its layout (fields inside the point
 /// record, known datatypes, data large enough, little endian); throws core::InputError naming
 /// `where` and what was expected.
-PointCloud2 parse_pointcloud2(std::span<const std::uint8_t> message,
-                              RosSerialization serialization, const std::string& where);
+PointCloud2 parse_pointcloud2(std::span<const std::uint8_t> message, RosSerialization serialization,
+                              const std::string& where);
 
 /// How clouds become organized scans.
 struct PointCloud2Options {
   /// vlp16 | vlp32c | hdl32e; "" = vlp16 when the cloud has at most 16 rings, else an error
   /// asking for the model.
   std::string model;
-  double scan_rate_hz{10.0};    ///< revolutions per second; sets the scan's columns
-  double cut_azimuth_deg{0.0};  ///< column 0 starts here (Velodyne azimuth: clockwise, 0 = +x)
+  double scan_rate_hz{10.0};       ///< revolutions per second; sets the scan's columns
+  double cut_azimuth_deg{0.0};     ///< column 0 starts here (Velodyne azimuth: clockwise, 0 = +x)
   std::string ring_field{"ring"};  ///< ring index (0 = bottom), as velodyne_pointcloud writes it
 };
 

@@ -115,7 +115,9 @@ struct Rosbag1Reader::Record {
   std::uint32_t data_bytes{0};
 };
 
-void Rosbag1Reader::FileCloser::operator()(std::FILE* f) const { std::fclose(f); }
+void Rosbag1Reader::FileCloser::operator()(std::FILE* f) const {
+  std::fclose(f);
+}
 
 Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
   const std::string name = path.string();
@@ -168,10 +170,9 @@ Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
         read_bytes(r.data_offset, r.data_bytes, data);
         const std::uint32_t count = r.fields->u32("count");
         if (data.size() != 8ull * count) {
-          throw core::InputError(name + ": chunk info record at offset " +
-                                 std::to_string(r.offset) + " holds " +
-                                 std::to_string(data.size()) + " bytes, expected " +
-                                 std::to_string(8ull * count));
+          throw core::InputError(
+              name + ": chunk info record at offset " + std::to_string(r.offset) + " holds " +
+              std::to_string(data.size()) + " bytes, expected " + std::to_string(8ull * count));
         }
         for (std::uint32_t i = 0; i < count; ++i) {
           const auto it = connections_.find(le32(data.data() + 8 * i));
@@ -197,8 +198,8 @@ Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
       topics_.push_back({c.topic, c.type, 0});
       it = topics_.end() - 1;
     } else if (it->type != c.type) {
-      throw core::InputError(name + ": topic " + c.topic + " has connections of types " +
-                             it->type + " and " + c.type);
+      throw core::InputError(name + ": topic " + c.topic + " has connections of types " + it->type +
+                             " and " + c.type);
     }
     it->messages += c.messages;
   }
@@ -207,7 +208,8 @@ Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
 
 Rosbag1Reader::~Rosbag1Reader() = default;
 
-void Rosbag1Reader::read_bytes(std::uint64_t offset, std::size_t n, std::vector<std::uint8_t>& out) {
+void Rosbag1Reader::read_bytes(std::uint64_t offset, std::size_t n,
+                               std::vector<std::uint8_t>& out) {
   out.resize(n);
   if (offset > file_size_ || n > file_size_ - offset) {
     throw core::InputError(path_.string() + ": truncated: needs " + std::to_string(n) +
@@ -278,8 +280,7 @@ void Rosbag1Reader::add_connection(const Record& record, std::span<const std::ui
 }
 
 void Rosbag1Reader::load_chunk(const Record& record) {
-  const std::string where =
-      path_.string() + ": chunk at offset " + std::to_string(record.offset);
+  const std::string where = path_.string() + ": chunk at offset " + std::to_string(record.offset);
   const std::string& compression = record.fields->get("compression");
   const std::uint32_t size = record.fields->u32("size");
   if (size > kMaxChunkBytes) {
@@ -338,11 +339,11 @@ void Rosbag1Reader::load_chunk(const Record& record) {
     }
     LZ4F_freeDecompressionContext(ctx);
     if (!error.empty() || out_at != size) {
-      throw core::InputError(where + ": corrupt lz4 data (" +
-                             (error.empty() ? std::to_string(out_at) + " of " +
-                                                  std::to_string(size) + " bytes"
-                                            : error) +
-                             ")");
+      throw core::InputError(
+          where + ": corrupt lz4 data (" +
+          (error.empty() ? std::to_string(out_at) + " of " + std::to_string(size) + " bytes"
+                         : error) +
+          ")");
     }
   } else {
     throw core::InputError(where + ": compression '" + compression +
@@ -452,7 +453,9 @@ bool Rosbag1Reader::next(RosbagMessage& out) {
                              " overlaps the index at " + std::to_string(index_pos_));
     }
     switch (static_cast<Rosbag1Op>(r.op)) {
-      case Rosbag1Op::kChunk: load_chunk(r); break;
+      case Rosbag1Op::kChunk:
+        load_chunk(r);
+        break;
       case Rosbag1Op::kMessageData: {  // not inside a chunk: unusual, but valid
         const std::uint32_t conn = r.fields->u32("conn");
         const auto it = connections_.find(conn);
@@ -474,7 +477,8 @@ bool Rosbag1Reader::next(RosbagMessage& out) {
       case Rosbag1Op::kIndexData:
       case Rosbag1Op::kConnection:
       case Rosbag1Op::kChunkInfo:
-      case Rosbag1Op::kBagHeader: break;
+      case Rosbag1Op::kBagHeader:
+        break;
       default:
         throw core::InputError(path_.string() + ": record at offset " + std::to_string(r.offset) +
                                " has unknown op " + hex_byte(r.op) + " (expected 0x02..0x07)");

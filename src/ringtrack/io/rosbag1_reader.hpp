@@ -36,9 +36,9 @@ struct Rosbag1Connection {
 
 /// Counters of a ROS 1 bag reader.
 struct Rosbag1Stats {
-  std::uint64_t chunks{0};             ///< chunks read
+  std::uint64_t chunks{0};              ///< chunks read
   std::uint64_t uncompressed_bytes{0};  ///< bytes of chunk data after decompression
-  std::uint64_t unknown_records{0};    ///< records of unknown kinds in the index, skipped
+  std::uint64_t unknown_records{0};     ///< records of unknown kinds (index, chunks), skipped
   std::uint64_t truncated_at{0};  ///< unindexed bags: offset of a last record cut off by the end
                                   ///< of the file (an interrupted recording), else 0
 };
@@ -95,8 +95,8 @@ class Rosbag1Reader final : public RosbagReader {
   std::vector<RosbagTopicInfo> topics_;
   std::string selected_;
   bool started_{false};
-  std::uint64_t offset_{0};  // next top-level record
-  std::uint64_t chunk_offset_{0};  // file offset of the chunk being read (for messages)
+  std::uint64_t offset_{0};          // next top-level record
+  std::uint64_t chunk_offset_{0};    // file offset of the chunk being read (for messages)
   std::vector<std::uint8_t> raw_;    // compressed chunk data
   std::vector<std::uint8_t> chunk_;  // uncompressed chunk data
   std::size_t chunk_at_{0};          // next record inside chunk_

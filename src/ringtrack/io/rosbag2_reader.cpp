@@ -93,8 +93,8 @@ DbFile open_db(const fs::path& path) {
       file.topics.push_back(std::move(t));
     }
     if (step != SQLITE_DONE) {
-      throw core::InputError(path.string() + ": reading the topics table: " +
-                             sqlite3_errmsg(file.db.get()));
+      throw core::InputError(path.string() +
+                             ": reading the topics table: " + sqlite3_errmsg(file.db.get()));
     }
   }
   {
@@ -108,8 +108,8 @@ DbFile open_db(const fs::path& path) {
       }
     }
     if (step != SQLITE_DONE) {
-      throw core::InputError(path.string() + ": reading the messages table: " +
-                             sqlite3_errmsg(file.db.get()));
+      throw core::InputError(path.string() +
+                             ": reading the messages table: " + sqlite3_errmsg(file.db.get()));
     }
   }
   return file;
@@ -198,8 +198,9 @@ struct Rosbag2Reader::Impl {
         throw core::InputError(file.path.string() + ": topic " + selected + " is serialized as '" +
                                it->serialization_format + "', expected cdr");
       }
-      stmt = file.prepare("SELECT timestamp, data FROM messages WHERE topic_id = ? "
-                          "ORDER BY timestamp, id");
+      stmt = file.prepare(
+          "SELECT timestamp, data FROM messages WHERE topic_id = ? "
+          "ORDER BY timestamp, id");
       sqlite3_bind_int64(stmt.get(), 1, it->id);
       return true;
     }
@@ -220,7 +221,8 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : impl_(std::make_unique<Impl
       }
       std::sort(m.files.begin(), m.files.end());
       if (m.files.empty()) {
-        throw core::InputError(name + ": not a rosbag2 folder (expected metadata.yaml or .db3 files)");
+        throw core::InputError(name +
+                               ": not a rosbag2 folder (expected metadata.yaml or .db3 files)");
       }
     }
   } else if (fs::is_regular_file(path)) {
@@ -248,7 +250,9 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : impl_(std::make_unique<Impl
 
 Rosbag2Reader::~Rosbag2Reader() = default;
 
-const std::vector<RosbagTopicInfo>& Rosbag2Reader::topics() const { return impl_->topics; }
+const std::vector<RosbagTopicInfo>& Rosbag2Reader::topics() const {
+  return impl_->topics;
+}
 
 void Rosbag2Reader::select_topic(const std::string& name) {
   Impl& m = *impl_;
@@ -291,10 +295,21 @@ bool Rosbag2Reader::next(RosbagMessage& out) {
   return false;
 }
 
-std::uint64_t Rosbag2Reader::other_messages() const { return impl_->other; }
+std::uint64_t Rosbag2Reader::other_messages() const {
+  return impl_->other;
+}
 
-const fs::path& Rosbag2Reader::path() const { return impl_->path; }
+const fs::path& Rosbag2Reader::path() const {
+  return impl_->path;
+}
 
-const std::vector<fs::path>& Rosbag2Reader::files() const { return impl_->files; }
+const fs::path& Rosbag2Reader::current_file() const {
+  const Impl& m = *impl_;
+  return m.file_index > 0 ? m.dbs[m.file_index - 1].path : m.path;
+}
+
+const std::vector<fs::path>& Rosbag2Reader::files() const {
+  return impl_->files;
+}
 
 }  // namespace ringtrack::io

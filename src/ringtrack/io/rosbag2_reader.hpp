@@ -28,6 +28,7 @@ class Rosbag2Reader final : public RosbagReader {
   bool next(RosbagMessage& out) override;
   [[nodiscard]] std::uint64_t other_messages() const override;
   [[nodiscard]] const std::filesystem::path& path() const override;
+  [[nodiscard]] const std::filesystem::path& current_file() const override;
   /// The .db3 files in reading order.
   [[nodiscard]] const std::vector<std::filesystem::path>& files() const;
 

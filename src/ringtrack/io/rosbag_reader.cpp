@@ -14,8 +14,9 @@ RosMessageCursor::RosMessageCursor(std::span<const std::uint8_t> message,
                                    RosSerialization serialization, std::string where)
     : body_(message), serialization_(serialization), where_(std::move(where)) {
   if (serialization_ == RosSerialization::kCdr) {
-    if (message.size() < 4) fail("message of " + std::to_string(message.size()) +
-                                 " bytes is shorter than the CDR encapsulation header");
+    if (message.size() < 4)
+      fail("message of " + std::to_string(message.size()) +
+           " bytes is shorter than the CDR encapsulation header");
     // 0x00 0x00: plain CDR big endian, 0x00 0x01: little endian.
     if (message[0] != 0 || message[1] > 1) {
       fail("unsupported CDR encapsulation " + std::to_string(message[0]) + "," +
@@ -28,8 +29,7 @@ RosMessageCursor::RosMessageCursor(std::span<const std::uint8_t> message,
 }
 
 void RosMessageCursor::fail(const std::string& what) const {
-  throw core::InputError(where_ + ": " + what + " (at byte " + std::to_string(origin_ + at_) +
-                         ")");
+  throw core::InputError(where_ + ": " + what + " (at byte " + std::to_string(origin_ + at_) + ")");
 }
 
 void RosMessageCursor::align(std::size_t n) {

@@ -50,6 +50,8 @@ class RosbagReader {
   [[nodiscard]] virtual std::uint64_t other_messages() const = 0;
   /// The bag's path, for messages.
   [[nodiscard]] virtual const std::filesystem::path& path() const = 0;
+  /// The file the last message came from (a rosbag2 .db3 file; the bag itself for ROS 1).
+  [[nodiscard]] virtual const std::filesystem::path& current_file() const { return path(); }
 };
 
 /// Reads the fields of one serialized message in either serialization: ROS 1 packs fields

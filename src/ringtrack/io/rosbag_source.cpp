@@ -80,7 +80,7 @@ RosbagScanSource::RosbagScanSource(std::unique_ptr<RosbagReader> reader,
 }
 
 std::string RosbagScanSource::where(std::uint64_t index) const {
-  return reader_->path().string() + " (topic " + topic_.name + ", message " +
+  return reader_->current_file().string() + " (topic " + topic_.name + ", message " +
          std::to_string(index) + ")";
 }
 
@@ -135,8 +135,8 @@ const core::SensorModel& RosbagScanSource::model() const {
 }
 
 std::string RosbagScanSource::summary() const {
-  std::string line = std::to_string(stats_.messages) + " messages of " + topic_.name + " (" +
-                     topic_.type + ")";
+  std::string line =
+      std::to_string(stats_.messages) + " messages of " + topic_.name + " (" + topic_.type + ")";
   const auto add = [&line](const char* what, std::uint64_t n) {
     if (n > 0) line += ", " + std::to_string(n) + " " + what;
   };

@@ -43,15 +43,14 @@ ScanInputFormat guess_scan_input_format(const std::string& input) {
 
 std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
                                              const ScanSourceOptions& options) {
-  const ScanInputFormat format = options.format == ScanInputFormat::kAuto
-                                     ? guess_scan_input_format(input)
-                                     : options.format;
+  const ScanInputFormat format =
+      options.format == ScanInputFormat::kAuto ? guess_scan_input_format(input) : options.format;
   switch (format) {
     case ScanInputFormat::kPcap:
     case ScanInputFormat::kUdp: {
       VelodyneSourceOptions v = options.velodyne;
-      v.format = format == ScanInputFormat::kPcap ? VelodyneInputFormat::kPcap
-                                                  : VelodyneInputFormat::kUdp;
+      v.format =
+          format == ScanInputFormat::kPcap ? VelodyneInputFormat::kPcap : VelodyneInputFormat::kUdp;
       return open_velodyne_source(input, v);
     }
     case ScanInputFormat::kRosbag1:
@@ -71,7 +70,8 @@ std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
       }
       return std::make_unique<RosbagScanSource>(std::move(reader), std::move(b));
     }
-    case ScanInputFormat::kAuto: break;
+    case ScanInputFormat::kAuto:
+      break;
   }
   throw core::InputError(input + ": cannot tell the input format");
 }

@@ -331,7 +331,6 @@ void VelodyneDecoder::start_scan(double rel_deg, const VelodyneSequence& seq,
   int column = static_cast<int>(std::floor(rel_deg / step_deg_));
   column = std::clamp(column, 0, scan_->columns() - 1);
   first_column_ = column;
-  first_rel_deg_ = rel_deg;
   fill_column(column, seq, stamp_ns);
   prev_column_ = column;
 }

@@ -131,7 +131,6 @@ class VelodyneDecoder {
   std::vector<std::uint8_t> filled_;
   bool scan_is_first_{true};
   int first_column_{-1};
-  double first_rel_deg_{0};
   // The previous sequence.
   bool have_prev_{false};
   int prev_column_{0};

@@ -104,8 +104,8 @@ std::string list_topics(const std::vector<Rosbag2Topic>& topics) {
 std::vector<VelodyneScanPacket> parse_velodyne_scan_cdr(std::span<const std::uint8_t> message,
                                                         const std::string& where) {
   CdrReader cdr(message, where);
-  cdr.i32();  // header.stamp.sec
-  cdr.u32();  // header.stamp.nanosec
+  cdr.i32();          // header.stamp.sec
+  cdr.u32();          // header.stamp.nanosec
   cdr.skip_string();  // header.frame_id
   const std::uint32_t count = cdr.u32();
   // Each packet needs at least 8 + 1206 bytes: reject absurd counts before allocating.
@@ -123,7 +123,9 @@ std::vector<VelodyneScanPacket> parse_velodyne_scan_cdr(std::span<const std::uin
   return packets;
 }
 
-void VelodyneRosbag2Source::DbCloser::operator()(sqlite3* db) const { sqlite3_close(db); }
+void VelodyneRosbag2Source::DbCloser::operator()(sqlite3* db) const {
+  sqlite3_close(db);
+}
 void VelodyneRosbag2Source::StmtCloser::operator()(sqlite3_stmt* stmt) const {
   sqlite3_finalize(stmt);
 }
@@ -157,7 +159,8 @@ VelodyneRosbag2Source::VelodyneRosbag2Source(const std::filesystem::path& path,
       for (const auto& file : info["relative_file_paths"]) {
         // Old rosbag2 versions list paths relative to the bag's parent folder.
         const auto relative = file.as<std::string>();
-        const bool in_parent = !fs::exists(path / relative) && fs::exists(path.parent_path() / relative);
+        const bool in_parent =
+            !fs::exists(path / relative) && fs::exists(path.parent_path() / relative);
         files_.push_back(in_parent ? path.parent_path() / relative : path / relative);
       }
     } else {
@@ -173,7 +176,8 @@ VelodyneRosbag2Source::VelodyneRosbag2Source(const std::filesystem::path& path,
   }
   if (files_.empty()) throw core::InputError(name + ": no .db3 files in the bag");
   for (const auto& f : files_) {
-    if (!fs::exists(f)) throw core::InputError(f.string() + ": listed in metadata.yaml but missing");
+    if (!fs::exists(f))
+      throw core::InputError(f.string() + ": listed in metadata.yaml but missing");
   }
   if (!open_next_file()) throw core::InputError(name + ": the bag holds no messages");
 }
@@ -217,7 +221,8 @@ bool VelodyneRosbag2Source::open_next_file() {
       t.serialization_format = text(3);
       topics.push_back(std::move(t));
     }
-    if (step != SQLITE_DONE) throw core::InputError(name + ": reading topics: " + sqlite3_errmsg(db));
+    if (step != SQLITE_DONE)
+      throw core::InputError(name + ": reading topics: " + sqlite3_errmsg(db));
   }
   if (topics_.empty()) {  // the first file decides the topic
     topics_ = topics;
@@ -236,8 +241,9 @@ bool VelodyneRosbag2Source::open_next_file() {
       }
       if (scans.size() != 1) {
         throw core::InputError(name + ": " +
-                               (scans.empty() ? std::string("no ") + kVelodyneScanType + " topic"
-                                              : std::string("several VelodyneScan topics; choose one")) +
+                               (scans.empty()
+                                    ? std::string("no ") + kVelodyneScanType + " topic"
+                                    : std::string("several VelodyneScan topics; choose one")) +
                                " (topics: " + list_topics(topics_) + ")");
       }
       topic_ = scans.front();
@@ -284,8 +290,9 @@ bool VelodyneRosbag2Source::load_message() {
     const auto size = static_cast<std::size_t>(sqlite3_column_bytes(stmt_.get(), 0));
     message_.assign(blob, blob + size);
     ++stats_.messages;
-    packets_ = parse_velodyne_scan_cdr(
-        message_, where_ + " (message " + std::to_string(stats_.messages) + " of " + topic_.name + ")");
+    packets_ =
+        parse_velodyne_scan_cdr(message_, where_ + " (message " + std::to_string(stats_.messages) +
+                                              " of " + topic_.name + ")");
     stats_.packets += packets_.size();
     packet_index_ = 0;
     return true;

@@ -27,8 +27,8 @@ struct Rosbag2Topic {
 
 /// One packet of a velodyne_msgs/msg/VelodyneScan message.
 struct VelodyneScanPacket {
-  std::int64_t stamp_ns{0};               ///< the packet's header time
-  std::span<const std::uint8_t> data;     ///< its 1206 bytes (points into the message)
+  std::int64_t stamp_ns{0};            ///< the packet's header time
+  std::span<const std::uint8_t> data;  ///< its 1206 bytes (points into the message)
 };
 
 /// Parses a CDR-serialized velodyne_msgs/msg/VelodyneScan (with its 4-byte encapsulation

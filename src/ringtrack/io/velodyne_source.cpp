@@ -16,7 +16,9 @@ class PcapInput final : public VelodyneScanSource {
   PcapInput(const std::string& input, const VelodyneSourceOptions& o)
       : source_(input, o.pcap, o.decoder) {}
   std::optional<core::OrganizedScan> next() override { return source_.next(); }
-  [[nodiscard]] const core::SensorModel& model() const override { return source_.decoder().model(); }
+  [[nodiscard]] const core::SensorModel& model() const override {
+    return source_.decoder().model();
+  }
   [[nodiscard]] std::string summary() const override { return source_.summary(); }
 
  private:
@@ -28,7 +30,9 @@ class BagInput final : public VelodyneScanSource {
   BagInput(const std::string& input, const VelodyneSourceOptions& o)
       : source_(input, o.topic, o.decoder) {}
   std::optional<core::OrganizedScan> next() override { return source_.next(); }
-  [[nodiscard]] const core::SensorModel& model() const override { return source_.decoder().model(); }
+  [[nodiscard]] const core::SensorModel& model() const override {
+    return source_.decoder().model();
+  }
   [[nodiscard]] std::string summary() const override {
     const auto& s = source_.stats();
     const auto& d = source_.decoder().stats();
@@ -116,10 +120,14 @@ std::unique_ptr<VelodyneScanSource> open_velodyne_source(const std::string& inpu
                                          ? guess_velodyne_input_format(input)
                                          : options.format;
   switch (format) {
-    case VelodyneInputFormat::kPcap: return std::make_unique<PcapInput>(input, options);
-    case VelodyneInputFormat::kRosbag2: return std::make_unique<BagInput>(input, options);
-    case VelodyneInputFormat::kUdp: return std::make_unique<UdpInput>(input, options);
-    case VelodyneInputFormat::kAuto: break;
+    case VelodyneInputFormat::kPcap:
+      return std::make_unique<PcapInput>(input, options);
+    case VelodyneInputFormat::kRosbag2:
+      return std::make_unique<BagInput>(input, options);
+    case VelodyneInputFormat::kUdp:
+      return std::make_unique<UdpInput>(input, options);
+    case VelodyneInputFormat::kAuto:
+      break;
   }
   throw core::InputError(input + ": cannot tell the input format");
 }

@@ -19,13 +19,13 @@ namespace ringtrack::io {
 
 /// Where to listen and how much to buffer.
 struct VelodyneUdpOptions {
-  std::string host{"0.0.0.0"};  ///< local IPv4 address to bind (0.0.0.0: every interface)
-  std::uint16_t port{2368};     ///< UDP port; 0 picks a free one (see port())
+  std::string host{"0.0.0.0"};        ///< local IPv4 address to bind (0.0.0.0: every interface)
+  std::uint16_t port{2368};           ///< UDP port; 0 picks a free one (see port())
   int receive_buffer_bytes{8 << 20};  ///< SO_RCVBUF request (the kernel may cap it)
   bool reuse_address{true};  ///< SO_REUSEADDR: share the port with other listeners, e.g. a ROS
                              ///< driver (Velodyne sensors broadcast by default)
-  std::size_t max_queued_scans{2};    ///< decoded scans waiting for next(); beyond, the oldest
-                                      ///< is dropped (counted), so the socket is never blocked
+  std::size_t max_queued_scans{2};  ///< decoded scans waiting for next(); beyond, the oldest
+                                    ///< is dropped (counted), so the socket is never blocked
 };
 
 /// Counters of a UDP source.

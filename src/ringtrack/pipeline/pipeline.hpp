@@ -49,6 +49,8 @@ class Pipeline {
 
   /// The static map built so far (complete after finish()).
   [[nodiscard]] const mapping::StaticMap& static_map() const { return filter_.map(); }
+  /// The dynamic-object filter (its log and the scans it released in the last call).
+  [[nodiscard]] const mapping::DynamicObjectFilter& dynamic_filter() const { return filter_; }
   [[nodiscard]] const core::Config& config() const { return config_; }
   [[nodiscard]] const tracking::Tracker& tracker() const { return tracker_; }
 

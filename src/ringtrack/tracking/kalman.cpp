@@ -45,6 +45,12 @@ void ConstantVelocityKalman::update(const Eigen::Vector3d& z, const Eigen::Matri
   p_ = 0.5 * (p_ + p_.transpose()).eval();  // keep it symmetric against rounding
 }
 
+void ConstantVelocityKalman::hold_vertical_velocity() {
+  x_(5) = 0.0;
+  p_.row(5).setZero();
+  p_.col(5).setZero();
+}
+
 void ConstantVelocityKalman::cap_speed(double max_speed_mps) {
   const double speed = x_.tail<3>().norm();
   if (speed > max_speed_mps && speed > 0.0) x_.tail<3>() *= max_speed_mps / speed;

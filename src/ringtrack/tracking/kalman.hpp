@@ -23,6 +23,11 @@ class ConstantVelocityKalman {
   void predict(double dt_s, double q);
   /// Corrects with a position measurement z of covariance r.
   void update(const Eigen::Vector3d& z, const Eigen::Matrix3d& r);
+  /// Holds the vertical velocity at exactly zero (state and covariance): the constant-position
+  /// model in z for objects that stay on the ground.
+  void hold_vertical_velocity();
+  /// Adds variance (m^2) to the vertical position: a random walk in z.
+  void add_vertical_variance(double variance_m2) { p_(2, 2) += variance_m2; }
   /// Scales the velocity down to max_speed_mps when faster (its direction is kept).
   void cap_speed(double max_speed_mps);
 

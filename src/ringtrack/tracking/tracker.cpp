@@ -169,6 +169,10 @@ void Tracker::predict_all(double dt_s) {
   for (auto& h : hypotheses_) {
     const Eigen::Vector3d before = h.filter.position();
     h.filter.predict(dt_s, config_.process_noise);
+    if (config_.vertical_motion == core::VerticalMotion::kConstantPosition) {
+      h.filter.hold_vertical_velocity();
+      h.filter.add_vertical_variance(config_.vertical_position_noise * dt_s);
+    }
     // A missed object's box follows the prediction; a corrected one is replaced below.
     h.box = h.box.translated((h.filter.position() - before).cast<float>());
     ++h.age_scans;
@@ -203,6 +207,9 @@ void Tracker::assign(const std::vector<core::Detection>& detections) {
 
 void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
   h.filter.update(d.centroid.cast<double>(), measurement_r_[index]);
+  if (config_.vertical_motion == core::VerticalMotion::kConstantPosition) {
+    h.filter.hold_vertical_velocity();
+  }
   h.filter.cap_speed(max_speed_mps_);
   h.box = d.box;
   h.missed_scans = 0;
@@ -220,6 +227,9 @@ void Tracker::create(const core::Detection& d, int index) {
   h.id = next_id_++;
   h.filter = ConstantVelocityKalman(d.centroid.cast<double>(), measurement_r_[index],
                                     config_.initial_velocity_stddev_mps);
+  if (config_.vertical_motion == core::VerticalMotion::kConstantPosition) {
+    h.filter.hold_vertical_velocity();
+  }
   h.box = h.initial_box = h.anchor_box = d.box;
   h.anchor_position = h.filter.position();
   h.age_scans = 1;
@@ -232,8 +242,16 @@ void Tracker::create(const core::Detection& d, int index) {
 
 void Tracker::delete_uncertain() {
   const auto before = hypotheses_.size();
+  // With a random-walk height the vertical variance measures the rings' spread, not whether
+  // the object is still where the track thinks: only the horizontal block decides.
+  const bool horizontal = config_.vertical_motion == core::VerticalMotion::kConstantPosition;
   std::erase_if(hypotheses_, [&](const Hypothesis& h) {
-    return max_eigenvalue(h.position_covariance()) > config_.delete_eigenvalue_m2;
+    Eigen::Matrix3d p = h.position_covariance();
+    if (horizontal) {
+      p.row(2).setZero();
+      p.col(2).setZero();
+    }
+    return max_eigenvalue(p) > config_.delete_eigenvalue_m2;
   });
   stats_.deleted_uncertain = static_cast<int>(before - hypotheses_.size());
 }
@@ -282,10 +300,23 @@ void Tracker::report_velocity(Hypothesis& h) const {
 void Tracker::classify(Hypothesis& h) const {
   if (h.detection < 0) return;  // only a measured box is evidence either way
   if (!h.dynamic) {
-    const double moved = (h.position() - h.anchor_position).head<2>().norm();
+    // Measured evidence only: the filter's position drifts while coasting on a spurious
+    // velocity, and a relaxed detection may be any clutter near the prediction, so neither can
+    // make a static object (fence post, wall edge) dynamic.
+    // Clutter's clusters jump back and forth, a walker keeps going: the displacement must hold
+    // in dynamic_confirm_scans consecutive measured scans.
+    if (h.last_detection.relaxed) return;
+    const double moved =
+        (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
     if (!footprints_intersect(h.box, h.anchor_box) && moved > config_.dynamic_min_distance_m) {
+      ++h.moved_scans;
+    } else {
+      h.moved_scans = 0;
+    }
+    if (h.moved_scans >= config_.dynamic_confirm_scans) {
       h.dynamic = h.ever_dynamic = true;
       h.rest_scans = 0;
+      h.moved_scans = 0;
     }
     return;
   }
@@ -293,7 +324,7 @@ void Tracker::classify(Hypothesis& h) const {
   if (config_.rest_scans_to_static > 0 && h.rest_scans >= config_.rest_scans_to_static) {
     h.dynamic = false;
     h.anchor_box = h.box;
-    h.anchor_position = h.position();
+    h.anchor_position = h.last_detection.centroid.cast<double>();
     h.rest_scans = 0;
   }
 }

@@ -40,6 +40,7 @@ struct Hypothesis {
   int age_scans{0};                 ///< scans since creation, 1 in the creating scan
   int missed_scans{0};              ///< consecutive scans without an assigned detection
   int rest_scans{0};                ///< consecutive scans with reported speed zero
+  int moved_scans{0};               ///< consecutive measured scans away from the anchor
   std::size_t points{0};            ///< points of the assigned detection this scan, 0 when missed
   int detection{-1};                ///< index of the detection assigned this scan, -1 when none
   DetectionSummary last_detection;  ///< the most recent assigned detection

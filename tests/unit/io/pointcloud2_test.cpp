@@ -1,5 +1,7 @@
 // sensor_msgs/PointCloud2: parsing both serializations (against the test support serializer)
 // and organizing clouds into scans (against clouds built from a known grid).
+#include "ringtrack/io/pointcloud2.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -8,7 +10,6 @@
 #include <random>
 
 #include "ringtrack/core/error.hpp"
-#include "ringtrack/io/pointcloud2.hpp"
 #include "ringtrack/io/velodyne_packet.hpp"
 #include "support/rosbag_writers.hpp"
 
@@ -46,11 +47,15 @@ std::vector<GridPoint> grid_points(const core::SensorModel& m, double cut_deg) {
       const float range = grid_range(r, c);
       if (range == 0.0f) continue;
       const auto u = static_cast<std::size_t>(r);
-      const double az = firing + m.azimuth_offset_rad[u] -
-                        kTwoPi * m.scan_rate_hz * m.firing_offset_us[u] * 1e-6;
+      const double az =
+          firing + m.azimuth_offset_rad[u] - kTwoPi * m.scan_rate_hz * m.firing_offset_us[u] * 1e-6;
       const Eigen::Vector3f p = m.point(r, az, range);
-      test::TestPoint tp{p.x(), p.y(), p.z(), static_cast<float>(r * 10 + c % 7),
-                         static_cast<std::uint16_t>(r), static_cast<float>(c) * 1e-5f};
+      test::TestPoint tp{p.x(),
+                         p.y(),
+                         p.z(),
+                         static_cast<float>(r * 10 + c % 7),
+                         static_cast<std::uint16_t>(r),
+                         static_cast<float>(c) * 1e-5f};
       out.push_back({r, c, tp, firing});
     }
   }
@@ -66,7 +71,8 @@ PointCloud2 parse(const test::TestPointCloud2& c, test::RosEncoding e,
 TEST(PointCloud2, ParsesBothSerializations) {
   std::vector<test::TestPoint> pts;
   for (int i = 0; i < 6; ++i) {
-    pts.push_back({1.0f * i, -2.0f, 0.5f, 7.0f, static_cast<std::uint16_t>(i), 1e-3f * i});
+    const auto f = static_cast<float>(i);
+    pts.push_back({f, -2.0f, 0.5f, 7.0f, static_cast<std::uint16_t>(i), 1e-3f * f});
   }
   auto cloud = test::make_xyzirt_cloud(pts, 2, 3, 1'700'000'000'123'456'789);
   cloud.frame_id = "lidar_top";
@@ -161,14 +167,14 @@ TEST(PointCloud2, UnorganizedCloudWithRingsFillsTheGrid) {
       EXPECT_NEAR(scan.range_m(i), grid_range(g.ring, g.column), 1e-4f);
       EXPECT_EQ(scan.point(i), Eigen::Vector3f(g.point.x, g.point.y, g.point.z));
       EXPECT_EQ(scan.intensity(i), g.point.intensity);
-      EXPECT_NEAR(std::remainder(scan.column_azimuth_rad[static_cast<std::size_t>(g.column)] -
-                                     g.firing_rad,
-                                 kTwoPi),
-                  0.0, 1e-5);
+      EXPECT_NEAR(
+          std::remainder(scan.column_azimuth_rad[static_cast<std::size_t>(g.column)] - g.firing_rad,
+                         kTwoPi),
+          0.0, 1e-5);
       // Column stamps: the header stamp plus the earliest point time of the column.
-      EXPECT_NEAR(static_cast<double>(scan.column_stamp_ns[static_cast<std::size_t>(g.column)] -
-                                      stamp),
-                  g.column * 1e4, 2.0);
+      EXPECT_NEAR(
+          static_cast<double>(scan.column_stamp_ns[static_cast<std::size_t>(g.column)] - stamp),
+          g.column * 1e4, 2.0);
     }
     EXPECT_EQ(scan.stamp_ns, scan.column_stamp_ns[0]);
   }
@@ -255,8 +261,8 @@ TEST(PointCloud2, CloudsThatCannotBeOrganizedAreClearErrors) {
   PointCloud2Organizer named(options);
   EXPECT_EQ(named.organize(parse(tall, test::RosEncoding::kCdr, bytes), "t").rings(), 32);
   // Rows that are not rings.
-  const auto rows = test::make_xyzirt_cloud(std::vector<test::TestPoint>(8, {1, 0, 0, 0, 0, 0}),
-                                            8, 1, 0, /*with_ring=*/false);
+  const auto rows = test::make_xyzirt_cloud(std::vector<test::TestPoint>(8, {1, 0, 0, 0, 0, 0}), 8,
+                                            1, 0, /*with_ring=*/false);
   PointCloud2Options vlp16;
   vlp16.model = "vlp16";
   PointCloud2Organizer o16(vlp16);

@@ -381,9 +381,11 @@ TEST(VelodyneDecoder, PausedRecordingEndsTheScan) {
   for (std::size_t i = 70; i < packets.size(); ++i) {
     auto p = packets[i];
     std::uint32_t t = 0;
-    for (std::size_t b = 0; b < 4; ++b) t |= static_cast<std::uint32_t>(p.payload[1200 + b]) << (8 * b);
+    for (std::size_t b = 0; b < 4; ++b)
+      t |= static_cast<std::uint32_t>(p.payload[1200 + b]) << (8 * b);
     t += 5'000'000;
-    for (std::size_t b = 0; b < 4; ++b) p.payload[1200 + b] = static_cast<std::uint8_t>(t >> (8 * b));
+    for (std::size_t b = 0; b < 4; ++b)
+      p.payload[1200 + b] = static_cast<std::uint8_t>(t >> (8 * b));
     p.host_stamp_ns += 5'000'000'000;
     stream.push_back(p);
   }
@@ -407,8 +409,8 @@ TEST(VelodyneDecoder, PausedRecordingEndsTheScan) {
   EXPECT_FALSE(has_data(d.scans[0], 40 * 24));
   EXPECT_FALSE(has_data(d.scans[1], resume_column - 1));
   EXPECT_TRUE(has_data(d.scans[1], resume_column));
-  EXPECT_NEAR(static_cast<double>(d.stats.invalid_columns),
-              (columns - 40 * 24) + resume_column, 2.0);
+  EXPECT_NEAR(static_cast<double>(d.stats.invalid_columns), (columns - 40 * 24) + resume_column,
+              2.0);
   EXPECT_GT(d.scans[1].column_stamp_ns[static_cast<std::size_t>(resume_column)] -
                 d.scans[0].column_stamp_ns.front(),
             5'000'000'000);

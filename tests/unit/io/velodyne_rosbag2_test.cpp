@@ -22,7 +22,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path data_dir() {
-  if (const char* env = std::getenv("RINGTRACK_TEST_DATA")) return fs::path(env) / "vlp16_indoor_nebula";
+  if (const char* env = std::getenv("RINGTRACK_TEST_DATA"))
+    return fs::path(env) / "vlp16_indoor_nebula";
   return fs::path(RINGTRACK_SOURCE_DIR) / ".." / "shared" / "data" / "vlp16_indoor_nebula";
 }
 
@@ -134,7 +135,8 @@ std::vector<std::pair<int, std::vector<std::uint8_t>>> as_messages(
 
 TEST(VelodyneRosbag2, RealBagCarriesThePcapPacketsAndGivesItsScans) {
   const fs::path dir = data_dir();
-  if (!fs::exists(dir / "ros2_bag" / "metadata.yaml") || !fs::exists(dir / "vlp16_dual_4scans.pcap")) {
+  if (!fs::exists(dir / "ros2_bag" / "metadata.yaml") ||
+      !fs::exists(dir / "vlp16_dual_4scans.pcap")) {
     GTEST_SKIP() << "real VLP-16 test data not found at " << dir
                  << " (set RINGTRACK_TEST_DATA to the folder holding vlp16_indoor_nebula/)";
   }
@@ -184,9 +186,10 @@ TEST(VelodyneRosbag2, SyntheticBagDecodesLikeThePackets) {
   const auto ps = packets(2.8);
   auto messages = as_messages(ps, 0);
   messages.insert(messages.begin() + 1, {1, {0, 1, 0, 0, 42}});  // another topic: ignored
-  write_db3(dir.path() / "bag_0.db3", {{"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"},
-                                       {"/imu", "sensor_msgs/msg/Imu"}},
-            messages);
+  write_db3(
+      dir.path() / "bag_0.db3",
+      {{"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"}, {"/imu", "sensor_msgs/msg/Imu"}},
+      messages);
   std::ofstream(dir.path() / "metadata.yaml")
       << "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n"
          "  relative_file_paths:\n    - bag_0.db3\n  compression_format: \"\"\n";
@@ -206,7 +209,8 @@ TEST(VelodyneRosbag2, TopicChoice) {
   TempDir dir;
   const auto ps = packets(0.3);
   write_db3(dir.path() / "two.db3",
-            {{"/a", "velodyne_msgs/msg/VelodyneScan"}, {"/b", "velodyne_msgs/msg/VelodyneScan"},
+            {{"/a", "velodyne_msgs/msg/VelodyneScan"},
+             {"/b", "velodyne_msgs/msg/VelodyneScan"},
              {"/points", "sensor_msgs/msg/PointCloud2"}},
             as_messages(ps, 1));
   EXPECT_THROW(VelodyneRosbag2Source{dir.path() / "two.db3"}, core::InputError);  // ambiguous

@@ -68,7 +68,8 @@ TEST(VelodyneUdp, LoopbackReplayGivesTheFileScans) {
   ASSERT_NE(source.port(), 0);
   replay(ps, source.port());
   // Wait until every datagram arrived, then stop (flushes the scan in progress).
-  for (int i = 0; i < 200 && source.stats().datagrams < ps.size(); ++i) std::this_thread::sleep_for(10ms);
+  for (int i = 0; i < 200 && source.stats().datagrams < ps.size(); ++i)
+    std::this_thread::sleep_for(10ms);
   source.stop();
   EXPECT_EQ(source.stats().datagrams, ps.size()) << source.summary();
   std::vector<core::OrganizedScan> scans;
@@ -99,7 +100,8 @@ TEST(VelodyneUdp, SlowConsumerLosesWholeScansAndTheyAreCounted) {
   options.max_queued_scans = 1;
   VelodyneUdpSource source(options);
   replay(ps, source.port());  // nobody reads meanwhile
-  for (int i = 0; i < 200 && source.stats().datagrams < ps.size(); ++i) std::this_thread::sleep_for(10ms);
+  for (int i = 0; i < 200 && source.stats().datagrams < ps.size(); ++i)
+    std::this_thread::sleep_for(10ms);
   source.stop();
   const auto produced = decode_direct(ps).size();
   ASSERT_EQ(produced, 3u);
@@ -145,7 +147,7 @@ TEST(VelodyneUdp, UrlsAndBindErrors) {
   VelodyneUdpOptions same = options;
   same.port = first.port();
   EXPECT_THROW(VelodyneUdpSource{same}, core::InputError);  // already bound
-  options.host = "203.0.113.7";  // not a local address
+  options.host = "203.0.113.7";                             // not a local address
   EXPECT_THROW(VelodyneUdpSource{options}, core::InputError);
 }
 

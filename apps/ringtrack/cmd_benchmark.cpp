@@ -1,0 +1,513 @@
+// `ringtrack benchmark`: every built-in scenario with a static and a moving sensor, the default
+// configuration, the paper's Table II metrics, map metrics and time per stage, as a Markdown
+// report, a per-scan timing CSV, a plot and optionally JSON.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "benchmark_run.hpp"
+#include "commands.hpp"
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/io/csv_writers.hpp"
+#include "ringtrack/io/output_file.hpp"
+#include "ringtrack/sim/scenario.hpp"
+#include "ringtrack/version.hpp"
+
+namespace ringtrack::cli {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct BenchmarkOptions {
+  std::vector<int> scenarios{1, 2, 3, 4, 5, 6, 7};
+  std::optional<double> duration_s;
+  std::string out{"benchmark"};
+  bool json{false};
+  std::uint64_t seed{1};
+  std::string sensors{"both"};
+  bool no_plot{false};
+  bool no_deskew{false};
+  bool quiet{false};
+  bool save_tracks{false};
+  ConfigOptions config;
+};
+
+// The paper's Table II (ICRA 2019), for the report.
+struct PaperRow {
+  const char* data;
+  double mota, motp, mt, pt, ml;
+};
+constexpr PaperRow kPaper[] = {
+    {"simulated, static sensor", 0.677, 0.044, 0.75, 0.25, 0.0},
+    {"simulated, moving sensor", 0.533, 0.033, 0.57, 0.40, 0.03},
+    {"InLiDa (real, indoor; not comparable)", 0.562, 0.108, 0.49, 0.43, 0.08},
+};
+
+struct Goal {
+  double static_mota = 0.80, moving_mota = 0.70, motp_m = 0.05, ml_ratio = 0.05;
+};
+
+std::string fixed(double v, int decimals) {
+  if (!std::isfinite(v)) return "-";
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+  return buf;
+}
+
+std::string case_label(const BenchmarkCase& c) {
+  return std::to_string(c.scenario) + " " + c.name + (c.moving ? " (moving)" : " (static)");
+}
+
+std::string machine_description() {
+  std::string model = "unknown CPU";
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) model = line.substr(colon + 2);
+      break;
+    }
+  }
+  return model + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores";
+}
+
+std::string utc_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M UTC", &tm);
+  return buf;
+}
+
+nlohmann::ordered_json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
+
+// Same keys as `ringtrack eval --json` so the two can be compared.
+nlohmann::ordered_json metrics_json(const eval::MotSummary& s) {
+  return {{"mota", number_or_null(s.mota())},
+          {"motp", number_or_null(s.motp())},
+          {"true_positives", s.true_positives()},
+          {"matches", s.matches},
+          {"false_positives", s.false_positives},
+          {"misses", s.misses},
+          {"id_switches", s.switches},
+          {"fragmentations", s.fragmentations},
+          {"recall", number_or_null(s.recall())},
+          {"precision", number_or_null(s.precision())},
+          {"mostly_tracked", s.mostly_tracked},
+          {"partially_tracked", s.partially_tracked},
+          {"mostly_lost", s.mostly_lost},
+          {"mostly_tracked_ratio", number_or_null(s.mostly_tracked_ratio())},
+          {"partially_tracked_ratio", number_or_null(s.partially_tracked_ratio())},
+          {"mostly_lost_ratio", number_or_null(s.mostly_lost_ratio())},
+          {"idf1", number_or_null(s.idf1())},
+          {"gt_objects", s.gt_objects},
+          {"hypotheses", s.hypotheses},
+          {"gt_presences", s.gt_presences},
+          {"hypothesis_presences", s.hypothesis_presences},
+          {"frames", s.frames}};
+}
+
+nlohmann::ordered_json map_json(const eval::MapCounts& m) {
+  return {{"preservation_rate", number_or_null(m.preservation_rate())},
+          {"rejection_rate", number_or_null(m.rejection_rate())},
+          {"static_points", m.static_points},
+          {"static_kept", m.static_kept},
+          {"dynamic_points", m.dynamic_points},
+          {"dynamic_removed", m.dynamic_removed}};
+}
+
+struct StageStats {
+  double median, p95, max;
+};
+StageStats stats_of(const std::vector<double>& v) {
+  return {quantile(v, 0.5), quantile(v, 0.95), v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())};
+}
+
+const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>> kStages = {
+    {"segmentation", &StageSeries::segmentation},
+    {"detection", &StageSeries::detection},
+    {"tracking", &StageSeries::tracking},
+    {"mapping", &StageSeries::mapping},
+    {"total", &StageSeries::total}};
+
+nlohmann::ordered_json times_json(const StageSeries& s) {
+  nlohmann::ordered_json j;
+  for (const auto& [name, member] : kStages) {
+    const StageStats st = stats_of(s.*member);
+    j[name] = {{"median_ms", st.median}, {"p95_ms", st.p95}, {"max_ms", st.max}};
+  }
+  return j;
+}
+
+// A group of cases summed (never averaged): metrics, map counts and pooled times.
+struct Aggregate {
+  std::string label;
+  eval::MotSummary mot;
+  eval::MapCounts map;
+  StageSeries times;
+  std::int64_t scans = 0;
+  int cases = 0;
+  void add(const BenchmarkCase& c) {
+    mot += c.tracking.summary;
+    map += c.map;
+    for (const auto& [name, member] : kStages) {
+      (times.*member).insert((times.*member).end(), (c.times.*member).begin(), (c.times.*member).end());
+    }
+    scans += c.scans;
+    ++cases;
+  }
+};
+
+std::string table_row(const std::string& label, std::int64_t scans, const eval::MotSummary& s,
+                      const eval::MapCounts& m) {
+  std::ostringstream o;
+  o << "| " << label << " | " << scans << " | " << fixed(s.mota(), 3) << " | " << fixed(s.motp(), 3)
+    << " | " << fixed(s.mostly_tracked_ratio(), 2) << " / " << fixed(s.partially_tracked_ratio(), 2)
+    << " / " << fixed(s.mostly_lost_ratio(), 2) << " (" << s.mostly_tracked << "/"
+    << s.partially_tracked << "/" << s.mostly_lost << ") | " << s.switches << " | "
+    << s.false_positives << " | " << s.misses << " | " << s.gt_presences << " | "
+    << fixed(m.preservation_rate(), 4) << " | " << fixed(m.rejection_rate(), 4) << " |\n";
+  return o.str();
+}
+
+std::string report_markdown(const BenchmarkOptions& o, const std::vector<BenchmarkCase>& cases,
+                            const std::vector<Aggregate>& groups, double wall_s,
+                            const std::string& config_text, bool plotted) {
+  std::ostringstream md;
+  md << "# ringtrack benchmark\n\n";
+  md << "- date: " << utc_now() << "\n";
+  md << "- machine: " << machine_description() << " (shared with other processes: times are "
+        "indicative)\n";
+  md << "- ringtrack " << kVersion << ", seed " << o.seed << ", "
+     << (o.duration_s ? "duration " + fixed(*o.duration_s, 1) + " s per scenario"
+                      : std::string("full scenario durations"))
+     << ", " << (o.config.file.empty() && o.config.overrides.empty() ? "default configuration"
+                                                                      : "configuration: see config.yaml")
+     << (o.no_deskew ? ", moving-sensor scans not motion-compensated" : "") << "\n";
+  md << "- wall time " << fixed(wall_s, 1) << " s (simulation + pipeline + evaluation)\n\n";
+
+  md << "## Accuracy (as the paper's Table II)\n\n";
+  md << "Paper mode (hypotheses classified dynamic at least once), class person, match below "
+        "0.5 m; MT/PT/ML as ratios (counts); FN = misses; GT = ground-truth presences. Map: "
+        "preservation = static points kept, rejection = dynamic-object points removed "
+        "(docs/evaluation.md). Groups are sums over their scenarios, never averages.\n\n";
+  md << "| scenario | scans | MOTA | MOTP (m) | MT / PT / ML | IDSW | FP | FN | GT | map "
+        "preservation | map rejection |\n";
+  md << "| --- | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: |\n";
+  for (const BenchmarkCase& c : cases) {
+    md << table_row(case_label(c), c.scans, c.tracking.summary, c.map);
+  }
+  for (const Aggregate& g : groups) {
+    md << table_row("**" + g.label + "**", g.scans, g.mot, g.map);
+  }
+
+  md << "\n## Beside the paper\n\n";
+  md << "The paper's figures are after leave-one-out tuning on its own Gazebo scenarios; ours use "
+        "the default configuration on ringtrack's simulator, so they are alike in kind, not "
+        "identical data.\n\n";
+  md << "| data | MOTA | MOTP (m) | MT / PT / ML |\n| --- | ---: | ---: | --- |\n";
+  const auto paper_row = [&](const PaperRow& p) {
+    md << "| paper: " << p.data << " | " << fixed(p.mota, 3) << " | " << fixed(p.motp, 3) << " | "
+       << fixed(p.mt, 2) << " / " << fixed(p.pt, 2) << " / " << fixed(p.ml, 2) << " |\n";
+  };
+  const auto our_row = [&](const Aggregate& g) {
+    md << "| ringtrack: " << g.label << " | " << fixed(g.mot.mota(), 3) << " | "
+       << fixed(g.mot.motp(), 3) << " | " << fixed(g.mot.mostly_tracked_ratio(), 2) << " / "
+       << fixed(g.mot.partially_tracked_ratio(), 2) << " / " << fixed(g.mot.mostly_lost_ratio(), 2)
+       << " |\n";
+  };
+  for (const Aggregate& g : groups) {
+    if (g.label == "all static") {
+      paper_row(kPaper[0]);
+      our_row(g);
+    } else if (g.label == "all moving") {
+      paper_row(kPaper[1]);
+      our_row(g);
+    }
+  }
+  paper_row(kPaper[2]);
+
+  const Goal goal;
+  md << "\nGoal for the defaults (issue 5): MOTA >= " << fixed(goal.static_mota, 2)
+     << " static, >= " << fixed(goal.moving_mota, 2) << " moving, MOTP <= " << fixed(goal.motp_m, 2)
+     << " m, ML <= " << fixed(goal.ml_ratio, 2) << ".";
+  for (const Aggregate& g : groups) {
+    if (g.label != "all static" && g.label != "all moving") continue;
+    const double need = g.label == "all static" ? goal.static_mota : goal.moving_mota;
+    const bool met = g.mot.mota() >= need && g.mot.motp() <= goal.motp_m &&
+                     g.mot.mostly_lost_ratio() <= goal.ml_ratio;
+    md << " " << g.label << ": " << (met ? "met" : "not met") << ".";
+  }
+  md << "\n\n## Time per stage (ms per scan)\n\n";
+  md << "Wall time of each stage of `Pipeline::process`, one thread; median / p95 / max over the "
+        "scans.\n\n";
+  md << "| scenario | segmentation | detection | tracking | mapping | total |\n";
+  md << "| --- | --- | --- | --- | --- | --- |\n";
+  const auto time_row = [&](const std::string& label, const StageSeries& s) {
+    md << "| " << label;
+    for (const auto& [name, member] : kStages) {
+      const StageStats st = stats_of(s.*member);
+      md << " | " << fixed(st.median, 2) << " / " << fixed(st.p95, 2) << " / " << fixed(st.max, 2);
+    }
+    md << " |\n";
+  };
+  for (const BenchmarkCase& c : cases) time_row(case_label(c), c.times);
+  for (const Aggregate& g : groups) time_row("**" + g.label + "**", g.times);
+  md << "\nPer-scan times: `timing.csv`"
+     << (plotted ? "; plot: `stage_times.png` (time per stage over each sequence, as the paper's "
+                   "Fig. 6)."
+                 : " (no plot: python3-matplotlib unavailable or --no-plot).")
+     << "\n\n";
+  md << "<details><summary>configuration</summary>\n\n```yaml\n" << config_text << "```\n\n</details>\n";
+  return md.str();
+}
+
+// Runs the plot script with Debian's Python; false (and a warning) when it cannot.
+bool plot_stage_times(const fs::path& timing_csv, const fs::path& png) {
+  const fs::path script = fs::path(RINGTRACK_SCRIPTS_DIR) / "plot_stage_times.py";
+  const char* python = "/usr/bin/python3";
+  if (!fs::exists(python) || !fs::exists(script)) {
+    std::cerr << "ringtrack: warning: no plot: " << (fs::exists(python) ? script.string() : python)
+              << " not found\n";
+    return false;
+  }
+  if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) {
+    std::cerr << "ringtrack: warning: no plot: python3-matplotlib is not installed (apt-get "
+                 "install python3-matplotlib)\n";
+    return false;
+  }
+  const auto quote = [](const std::string& s) {
+    std::string q = "'";
+    for (const char ch : s) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
+    return q + "'";
+  };
+  const std::string cmd = std::string(python) + " " + quote(script.string()) + " " +
+                          quote(timing_csv.string()) + " " + quote(png.string());
+  if (std::system(cmd.c_str()) != 0) {
+    std::cerr << "ringtrack: warning: the plot script failed: " << cmd << "\n";
+    return false;
+  }
+  return true;
+}
+
+void run_benchmark(const BenchmarkOptions& o) {
+  const core::Config config = o.config.load();
+  core::validate_config(config);
+  if (o.duration_s && !(*o.duration_s > 0)) throw core::ConfigError("benchmark: --duration must be > 0");
+  const bool with_static = o.sensors != "moving";
+  const bool with_moving = o.sensors != "static";
+  std::vector<sim::Scenario> scenarios;
+  for (const int number : o.scenarios) {
+    sim::Scenario s = sim::builtin_scenario(std::to_string(number));
+    if (o.duration_s) s.duration_s = *o.duration_s;
+    if (with_static) scenarios.push_back(s);
+    if (with_moving) scenarios.push_back(sim::with_moving_sensor(s));
+  }
+
+  const fs::path out = o.out;
+  std::error_code ec;
+  fs::create_directories(out, ec);
+  if (ec) throw core::InputError(o.out + ": cannot create the output folder: " + ec.message());
+  const std::string config_text = core::dump_config(config);
+  io::write_file(out / "config.yaml", config_text);
+
+  BenchmarkCaseOptions case_options;
+  case_options.seed = o.seed;
+  case_options.deskew = !o.no_deskew;
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<BenchmarkCase> cases;
+  io::OutputFile timing(out / "timing.csv");
+  timing.write("case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n");
+  for (const sim::Scenario& s : scenarios) {
+    const bool moving = s.sensor.motion != sim::SensorMotion::kStatic;
+    if (!o.quiet && !o.json) {
+      std::cerr << "scenario " << s.number << " " << s.name << (moving ? " (moving)" : " (static)")
+                << " ..." << std::flush;
+    }
+    // --save-tracks: the same files as `simulate` + `run` write, for `ringtrack eval` and plots.
+    std::unique_ptr<io::TracksCsvWriter> tracks_csv;
+    std::unique_ptr<io::ObjectsCsvWriter> objects_csv;
+    case_options.on_scan = {};
+    if (o.save_tracks) {
+      const std::string stem = std::to_string(s.number) + (moving ? "-moving" : "-static");
+      tracks_csv = std::make_unique<io::TracksCsvWriter>(out / ("tracks-" + stem + ".csv"));
+      objects_csv = std::make_unique<io::ObjectsCsvWriter>(out / ("objects-" + stem + ".csv"));
+      case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
+        const auto k = static_cast<std::uint64_t>(scan.index);
+        for (const tracking::Hypothesis& h : r.hypotheses) {
+          io::TrackRow row;
+          row.scan = k;
+          row.stamp_ns = scan.scan.stamp_ns;
+          row.id = h.id;
+          row.position = h.position();
+          row.velocity = h.velocity_mps;
+          row.box = h.box;
+          row.dynamic = h.dynamic;
+          row.ever_dynamic = h.ever_dynamic;
+          row.age = static_cast<std::uint32_t>(h.age_scans);
+          row.points = static_cast<std::uint32_t>(h.points);
+          tracks_csv->write(row);
+        }
+        for (const sim::ObjectTruth& t : scan.objects) {
+          io::ObjectRow row;
+          row.scan = k;
+          row.stamp_ns = scan.scan.stamp_ns;
+          row.id = t.id;
+          row.class_name = std::string(sim::class_name(t.object_class));
+          row.points = static_cast<std::uint32_t>(t.hit_points);
+          row.centroid = t.centroid_m.cast<double>();
+          row.box = t.box;
+          row.true_center = t.body_center_m.cast<double>();
+          row.moving = t.moving;
+          objects_csv->write(row);
+        }
+      };
+    }
+    BenchmarkCase c = run_benchmark_case(s, config, case_options);
+    if (tracks_csv) {
+      tracks_csv->close();
+      objects_csv->close();
+    }
+    if (!o.quiet && !o.json) {
+      std::cerr << " " << c.scans << " scans, MOTA " << fixed(c.tracking.summary.mota(), 3)
+                << ", simulate " << fixed(c.simulate_s, 1) << " s, pipeline "
+                << fixed(c.pipeline_s, 1) << " s\n";
+    }
+    const std::string label = case_label(c);
+    std::string rows;
+    char buf[256];
+    for (std::size_t k = 0; k < c.times.total.size(); ++k) {
+      std::snprintf(buf, sizeof buf, "%s,%d,%s,%zu,%.4f,%.4f,%.4f,%.4f,%.4f\n", label.c_str(),
+                    c.scenario, moving ? "moving" : "static", k, c.times.segmentation[k],
+                    c.times.detection[k], c.times.tracking[k], c.times.mapping[k],
+                    c.times.total[k]);
+      rows += buf;
+    }
+    timing.write(rows);
+    cases.push_back(std::move(c));
+  }
+  timing.close();
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::vector<Aggregate> groups;
+  Aggregate all_static, all_moving, overall;
+  all_static.label = "all static";
+  all_moving.label = "all moving";
+  overall.label = "overall";
+  for (const BenchmarkCase& c : cases) {
+    (c.moving ? all_moving : all_static).add(c);
+    overall.add(c);
+  }
+  if (all_static.cases > 0) groups.push_back(all_static);
+  if (all_moving.cases > 0) groups.push_back(all_moving);
+  if (all_static.cases > 0 && all_moving.cases > 0) groups.push_back(overall);
+
+  const bool plotted = !o.no_plot && plot_stage_times(out / "timing.csv", out / "stage_times.png");
+  io::write_file(out / "report.md", report_markdown(o, cases, groups, wall_s, config_text, plotted));
+
+  nlohmann::ordered_json j;
+  j["ringtrack"] = kVersion;
+  j["date"] = utc_now();
+  j["machine"] = machine_description();
+  j["seed"] = o.seed;
+  j["duration_s"] = o.duration_s ? nlohmann::ordered_json(*o.duration_s) : nlohmann::ordered_json(nullptr);
+  j["threshold_m"] = case_options.evaluation.threshold_m;
+  j["wall_s"] = wall_s;
+  j["cases"] = nlohmann::ordered_json::array();
+  for (const BenchmarkCase& c : cases) {
+    j["cases"].push_back({{"scenario", c.scenario},
+                          {"name", c.name},
+                          {"sensor", c.moving ? "moving" : "static"},
+                          {"scans", c.scans},
+                          {"hypotheses_total", c.tracking.hypotheses_total},
+                          {"hypotheses_evaluated", c.tracking.hypotheses_evaluated},
+                          {"metrics", metrics_json(c.tracking.summary)},
+                          {"map", map_json(c.map)},
+                          {"times", times_json(c.times)},
+                          {"simulate_s", c.simulate_s},
+                          {"pipeline_s", c.pipeline_s}});
+  }
+  for (const Aggregate& g : groups) {
+    j["groups"][g.label] = {{"scans", g.scans},
+                            {"metrics", metrics_json(g.mot)},
+                            {"map", map_json(g.map)},
+                            {"times", times_json(g.times)}};
+  }
+  j["paper"] = nlohmann::ordered_json::array();
+  for (const PaperRow& p : kPaper) {
+    j["paper"].push_back({{"data", p.data},
+                          {"mota", p.mota},
+                          {"motp", p.motp},
+                          {"mostly_tracked_ratio", p.mt},
+                          {"partially_tracked_ratio", p.pt},
+                          {"mostly_lost_ratio", p.ml}});
+  }
+  io::write_file(out / "results.json", j.dump(2) + "\n");
+  if (o.json) {
+    std::cout << j.dump(2) << "\n";
+    return;
+  }
+  std::cout << "benchmark of " << cases.size() << " runs in " << fixed(wall_s, 1) << " s\n";
+  for (const Aggregate& g : groups) {
+    std::cout << "  " << g.label << ": MOTA " << fixed(g.mot.mota(), 3) << ", MOTP "
+              << fixed(g.mot.motp(), 3) << " m, MT/PT/ML " << fixed(g.mot.mostly_tracked_ratio(), 2)
+              << "/" << fixed(g.mot.partially_tracked_ratio(), 2) << "/"
+              << fixed(g.mot.mostly_lost_ratio(), 2) << ", IDSW " << g.mot.switches << ", FP "
+              << g.mot.false_positives << ", FN " << g.mot.misses << ", map preservation "
+              << fixed(g.map.preservation_rate(), 4) << ", rejection "
+              << fixed(g.map.rejection_rate(), 4) << "\n";
+  }
+  std::cout << "outputs: " << o.out << "/{report.md,results.json,timing.csv,config.yaml"
+            << (plotted ? ",stage_times.png" : "") << "}\n";
+}
+
+}  // namespace
+
+void register_benchmark(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "benchmark",
+      "simulate the built-in scenarios (static and moving sensor), run the pipeline with one "
+      "configuration, and report the paper's Table II metrics, map metrics and time per stage");
+  auto o = std::make_shared<BenchmarkOptions>();
+  cmd->add_option("--scenarios", o->scenarios, "built-in scenarios to run (1-7)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, 7))
+      ->capture_default_str();
+  cmd->add_option("--duration", o->duration_s,
+                  "seconds to simulate per scenario (default: each scenario's full length)");
+  cmd->add_option("--out", o->out, "output folder (created)")->capture_default_str();
+  cmd->add_flag("--json", o->json, "print the results as JSON on stdout");
+  cmd->add_option("--seed", o->seed, "simulator seed (actors, noise)")->capture_default_str();
+  cmd->add_option("--sensors", o->sensors, "sensor motions to run: both, static or moving")
+      ->check(CLI::IsMember({"both", "static", "moving"}))
+      ->capture_default_str();
+  cmd->add_flag("--no-plot", o->no_plot, "do not draw stage_times.png");
+  cmd->add_flag("--no-deskew", o->no_deskew,
+                "give moving-sensor scans to the pipeline without motion compensation");
+  cmd->add_flag("--save-tracks", o->save_tracks,
+                "also write tracks-<N>-<sensor>.csv and objects-<N>-<sensor>.csv per run");
+  cmd->add_flag("--quiet", o->quiet, "no progress on stderr");
+  o->config.add_to(*cmd);
+  cmd->callback([o] { run_benchmark(*o); });
+}
+
+}  // namespace ringtrack::cli

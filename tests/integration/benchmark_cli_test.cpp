@@ -1,0 +1,133 @@
+// `ringtrack benchmark` end to end: a short run of two scenarios must write a report with the
+// Table II rows, the paper's figures and the stage times, and its numbers must equal those of
+// `ringtrack simulate` + `ringtrack run` + `ringtrack eval` on the same scenarios and seed.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <string>
+
+#include "support/run_command.hpp"
+
+namespace ringtrack {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::run_command;
+
+const std::string kCli = RINGTRACK_CLI_PATH;
+
+std::string read(const fs::path& path) {
+  std::ifstream in(path);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+class BenchmarkCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new fs::path(testing::make_temp_dir("ringtrack_benchmark_cli"));
+    result_ = new testing::CommandResult(
+        run_command(kCli + " benchmark --scenarios 1,7 --duration 3 --seed 5 --no-plot --json --out " +
+                    (*dir_ / "bench").string()));
+  }
+  static void TearDownTestSuite() {
+    std::error_code ec;
+    fs::remove_all(*dir_, ec);
+    delete result_;
+    delete dir_;
+  }
+  static fs::path* dir_;
+  static testing::CommandResult* result_;
+};
+
+fs::path* BenchmarkCli::dir_ = nullptr;
+testing::CommandResult* BenchmarkCli::result_ = nullptr;
+
+TEST_F(BenchmarkCli, WritesReportTimingAndJson) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->err;
+  const fs::path out = *dir_ / "bench";
+  for (const char* f : {"report.md", "results.json", "timing.csv", "config.yaml"}) {
+    EXPECT_TRUE(fs::is_regular_file(out / f)) << f;
+  }
+  const auto j = nlohmann::json::parse(result_->out);
+  ASSERT_EQ(j["cases"].size(), 4u);  // two scenarios x static/moving
+  EXPECT_EQ(j["cases"][0]["scenario"], 1);
+  EXPECT_EQ(j["cases"][0]["sensor"], "static");
+  EXPECT_EQ(j["cases"][1]["sensor"], "moving");
+  EXPECT_EQ(j["cases"][2]["scenario"], 7);
+  for (const auto& c : j["cases"]) {
+    EXPECT_EQ(c["scans"], 30);
+    for (const char* stage : {"segmentation", "detection", "tracking", "mapping", "total"}) {
+      const auto& t = c["times"][stage];
+      EXPECT_LE(t["median_ms"].get<double>(), t["p95_ms"].get<double>()) << stage;
+      EXPECT_LE(t["p95_ms"].get<double>(), t["max_ms"].get<double>()) << stage;
+    }
+    const auto& m = c["map"];
+    EXPECT_GT(m["static_points"].get<long>(), 0);
+    EXPECT_LE(m["static_kept"].get<long>(), m["static_points"].get<long>());
+    EXPECT_LE(m["dynamic_removed"].get<long>(), m["dynamic_points"].get<long>());
+  }
+  // Groups are sums of their cases.
+  long fp = 0;
+  for (const auto& c : j["cases"]) fp += c["metrics"]["false_positives"].get<long>();
+  EXPECT_EQ(j["groups"]["overall"]["metrics"]["false_positives"].get<long>(), fp);
+  EXPECT_EQ(j["paper"][0]["mota"].get<double>(), 0.677);
+
+  // One timing row per scan and case, plus the header.
+  const std::string timing = read(out / "timing.csv");
+  EXPECT_EQ(timing.rfind("case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n", 0), 0u);
+  EXPECT_EQ(std::count(timing.begin(), timing.end(), '\n'), 1 + 4 * 30);
+
+  const std::string report = read(out / "report.md");
+  for (const char* needle :
+       {"## Accuracy (as the paper's Table II)", "| 1 empty-field (static) | 30 |",
+        "| 7 hall (moving) | 30 |", "**all static**", "**all moving**", "**overall**",
+        "paper: simulated, static sensor | 0.677 | 0.044 | 0.75 / 0.25 / 0.00",
+        "paper: simulated, moving sensor | 0.533 | 0.033 | 0.57 / 0.40 / 0.03",
+        "InLiDa (real, indoor; not comparable) | 0.562", "## Time per stage (ms per scan)"}) {
+    EXPECT_NE(report.find(needle), std::string::npos) << needle;
+  }
+}
+
+// The benchmark's in-memory path must give exactly what the file-based tools give.
+TEST_F(BenchmarkCli, MatchesSimulateRunEval) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->err;
+  const auto bench = nlohmann::json::parse(result_->out);
+  for (const int k : {0, 2}) {  // the static-sensor cases (the file path does not deskew)
+    const auto& c = bench["cases"][static_cast<std::size_t>(k)];
+    const std::string scenario = std::to_string(c["scenario"].get<int>());
+    const fs::path seq = *dir_ / ("seq" + scenario);
+    const fs::path run = *dir_ / ("run" + scenario);
+    auto r = run_command(kCli + " simulate " + scenario + " --duration 3 --seed 5 --out " +
+                         seq.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = run_command(kCli + " run " + seq.string() + " --quiet --out " + run.string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    r = run_command(kCli + " eval --json --gt " + seq.string() + " --tracks " +
+                    (run / "tracks.csv").string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto ev = nlohmann::json::parse(r.out)["overall"];
+    const auto& m = c["metrics"];
+    for (const char* key : {"matches", "false_positives", "misses", "id_switches",
+                            "mostly_tracked", "partially_tracked", "mostly_lost", "gt_objects",
+                            "hypotheses", "gt_presences", "hypothesis_presences"}) {
+      EXPECT_EQ(m[key], ev[key]) << "scenario " << scenario << ": " << key;
+    }
+    if (!m["mota"].is_null()) {
+      EXPECT_NEAR(m["mota"].get<double>(), ev["mota"].get<double>(), 1e-9) << scenario;
+    }
+    if (!m["motp"].is_null()) {
+      // tracks.csv and objects.csv round positions to millimetres or finer.
+      EXPECT_NEAR(m["motp"].get<double>(), ev["motp"].get<double>(), 1e-3) << scenario;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace ringtrack

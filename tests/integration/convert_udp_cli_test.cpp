@@ -1,0 +1,139 @@
+// `ringtrack convert udp://...`: packets replayed to the live tool are recorded; Ctrl-C (SIGINT)
+// ends the recording with a complete sequence folder holding the scans of the packets.
+
+#include <arpa/inet.h>
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <signal.h>
+#include <sys/socket.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "ringtrack/io/sequence.hpp"
+#include "ringtrack/io/velodyne_decoder.hpp"
+#include "support/run_command.hpp"
+#include "support/velodyne_encoder.hpp"
+
+namespace ringtrack {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace std::chrono_literals;
+
+const std::string kCli = RINGTRACK_CLI_PATH;
+
+// A UDP port free right now on 127.0.0.1.
+std::uint16_t free_udp_port() {
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a);
+  socklen_t len = sizeof a;
+  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
+  ::close(fd);
+  return ntohs(a.sin_port);
+}
+
+// True once some socket is bound to the UDP port (/proc/net/udp lists local ports in hex).
+bool udp_port_bound(std::uint16_t port) {
+  std::ifstream in("/proc/net/udp");
+  std::string line;
+  char hex[8];
+  std::snprintf(hex, sizeof hex, ":%04X ", port);
+  while (std::getline(in, line)) {
+    if (line.find(hex) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(ConvertUdpCli, CtrlCEndsTheRecordingWithACompleteSequence) {
+  const std::string dir = testing::make_temp_dir("ringtrack-convert-udp-");
+  const std::uint16_t port = free_udp_port();
+  const std::string err_path = dir + "/stderr.txt";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(err, 2);
+    const std::string url = "udp://127.0.0.1:" + std::to_string(port);
+    const std::string out = dir + "/seq";
+    ::execl(kCli.c_str(), "ringtrack", "convert", url.c_str(), "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  bool bound = false;
+  for (int i = 0; i < 500 && !bound; ++i) {
+    std::this_thread::sleep_for(10ms);
+    bound = udp_port_bound(port);
+  }
+  ASSERT_TRUE(bound) << "the tool did not bind port " << port;
+
+  test::VelodyneEncoderOptions eo;
+  eo.start_azimuth_deg = 180.0;
+  const test::VelodyneEncoder enc(eo);
+  const auto packets = enc.encode(0, 250, [](long long s, int laser) {
+    return test::VelodyneEchoPair{{static_cast<std::uint16_t>(700 + (s * 13 + laser) % 8000), 3},
+                                  {}};
+  });
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(port);
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  for (std::size_t i = 0; i < packets.size(); ++i) {
+    ::sendto(fd, packets[i].payload.data(), packets[i].payload.size(), 0,
+             reinterpret_cast<const sockaddr*>(&to), sizeof to);
+    if (i % 20 == 19) std::this_thread::sleep_for(2ms);  // never fill the receive buffer
+  }
+  ::close(fd);
+  std::this_thread::sleep_for(300ms);  // let the receiver drain the socket
+  ::kill(pid, SIGINT);
+  int status = 0;
+  pid_t done = 0;
+  for (int i = 0; i < 1000 && done == 0; ++i) {
+    done = ::waitpid(pid, &status, WNOHANG);
+    if (done == 0) std::this_thread::sleep_for(10ms);
+  }
+  if (done == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+    FAIL() << "the tool did not stop on SIGINT";
+  }
+  std::stringstream err;
+  err << std::ifstream(err_path).rdbuf();
+  ASSERT_TRUE(WIFEXITED(status)) << err.str();
+  ASSERT_EQ(WEXITSTATUS(status), 0) << err.str();
+
+  io::VelodyneDecoder decoder;
+  for (const auto& p : packets) decoder.add_packet(p.payload, p.host_stamp_ns);
+  decoder.finish();
+  std::vector<core::OrganizedScan> expected;
+  while (auto s = decoder.pop_scan()) expected.push_back(std::move(*s));
+  ASSERT_EQ(expected.size(), 2u);
+  io::SequenceReader reader(dir + "/seq");  // sequence.yaml written: complete
+  ASSERT_EQ(reader.size(), expected.size()) << err.str();
+  io::SequenceScan s;
+  for (const auto& e : expected) {
+    ASSERT_TRUE(reader.next(s));
+    ASSERT_EQ(s.scan.valid_count(), e.valid_count());
+    for (std::size_t i = 0; i < e.size(); ++i) {
+      if (e.valid(i)) {
+        ASSERT_LT((s.scan.point(i) - e.point(i)).norm(), 1e-6f) << "cell " << i;
+      }
+    }
+  }
+  EXPECT_NE(err.str().find("wrote 2 scans"), std::string::npos) << err.str();
+  fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace ringtrack
