@@ -191,7 +191,8 @@ Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
   } else {
     scan_for_connections();
   }
-  for (const auto& [id, c] : connections_) {
+  for (const auto& entry : connections_) {
+    const auto& c = entry.second;  // a plain reference: clang 14 cannot capture structured bindings
     auto it = std::find_if(topics_.begin(), topics_.end(),
                            [&](const RosbagTopicInfo& t) { return t.name == c.topic; });
     if (it == topics_.end()) {
