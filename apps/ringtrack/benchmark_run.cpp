@@ -85,8 +85,8 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
     const auto t3 = Clock::now();
     if (options.on_scan) options.on_scan(scan, result);
     for (const tracking::Hypothesis& h : result.hypotheses) {
-      tracks.push_back({k, static_cast<std::int64_t>(h.id), h.position(), h.dynamic,
-                        h.ever_dynamic});
+      tracks.push_back(
+          {k, static_cast<std::int64_t>(h.id), h.position(), h.dynamic, h.ever_dynamic});
     }
     out.times.segmentation.push_back(result.times.segmentation_ms);
     out.times.detection.push_back(result.times.detection_ms);

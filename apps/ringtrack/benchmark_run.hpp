@@ -25,8 +25,8 @@ struct StageSeries {
 /// How one scenario run is done.
 struct BenchmarkCaseOptions {
   std::uint64_t seed{1};
-  bool deskew{true};                      ///< motion-compensate moving-sensor scans (exact poses)
-  eval::TrackingEvalOptions evaluation;   ///< paper mode, 0.5 m, class person
+  bool deskew{true};                     ///< motion-compensate moving-sensor scans (exact poses)
+  eval::TrackingEvalOptions evaluation;  ///< paper mode, 0.5 m, class person
   /// Called after every scan with the simulated scan (deskewed) and the pipeline's result,
   /// e.g. to write tracks.csv and objects.csv; may be empty.
   std::function<void(const sim::SimulatedScan&, const pipeline::FrameResult&)> on_scan;

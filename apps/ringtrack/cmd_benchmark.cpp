@@ -138,7 +138,8 @@ struct StageStats {
   double median, p95, max;
 };
 StageStats stats_of(const std::vector<double>& v) {
-  return {quantile(v, 0.5), quantile(v, 0.95), v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())};
+  return {quantile(v, 0.5), quantile(v, 0.95),
+          v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())};
 }
 
 const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>> kStages = {
@@ -169,7 +170,8 @@ struct Aggregate {
     mot += c.tracking.summary;
     map += c.map;
     for (const auto& [name, member] : kStages) {
-      (times.*member).insert((times.*member).end(), (c.times.*member).begin(), (c.times.*member).end());
+      (times.*member)
+          .insert((times.*member).end(), (c.times.*member).begin(), (c.times.*member).end());
     }
     scans += c.scans;
     ++cases;
@@ -194,13 +196,15 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
   std::ostringstream md;
   md << "# ringtrack benchmark\n\n";
   md << "- date: " << utc_now() << "\n";
-  md << "- machine: " << machine_description() << " (shared with other processes: times are "
+  md << "- machine: " << machine_description()
+     << " (shared with other processes: times are "
         "indicative)\n";
   md << "- ringtrack " << kVersion << ", seed " << o.seed << ", "
      << (o.duration_s ? "duration " + fixed(*o.duration_s, 1) + " s per scenario"
                       : std::string("full scenario durations"))
-     << ", " << (o.config.file.empty() && o.config.overrides.empty() ? "default configuration"
-                                                                      : "configuration: see config.yaml")
+     << ", "
+     << (o.config.file.empty() && o.config.overrides.empty() ? "default configuration"
+                                                             : "configuration: see config.yaml")
      << (o.no_deskew ? ", moving-sensor scans not motion-compensated" : "") << "\n";
   md << "- wall time " << fixed(wall_s, 1) << " s (simulation + pipeline + evaluation)\n\n";
 
@@ -276,7 +280,8 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
                    "Fig. 6)."
                  : " (no plot: python3-matplotlib unavailable or --no-plot).")
      << "\n\n";
-  md << "<details><summary>configuration</summary>\n\n```yaml\n" << config_text << "```\n\n</details>\n";
+  md << "<details><summary>configuration</summary>\n\n```yaml\n"
+     << config_text << "```\n\n</details>\n";
   return md.str();
 }
 
@@ -311,7 +316,8 @@ bool plot_stage_times(const fs::path& timing_csv, const fs::path& png) {
 void run_benchmark(const BenchmarkOptions& o) {
   const core::Config config = o.config.load();
   core::validate_config(config);
-  if (o.duration_s && !(*o.duration_s > 0)) throw core::ConfigError("benchmark: --duration must be > 0");
+  if (o.duration_s && !(*o.duration_s > 0))
+    throw core::ConfigError("benchmark: --duration must be > 0");
   const bool with_static = o.sensors != "moving";
   const bool with_moving = o.sensors != "static";
   std::vector<sim::Scenario> scenarios;
@@ -335,7 +341,8 @@ void run_benchmark(const BenchmarkOptions& o) {
   const auto start = std::chrono::steady_clock::now();
   std::vector<BenchmarkCase> cases;
   io::OutputFile timing(out / "timing.csv");
-  timing.write("case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n");
+  timing.write(
+      "case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n");
   for (const sim::Scenario& s : scenarios) {
     const bool moving = s.sensor.motion != sim::SensorMotion::kStatic;
     if (!o.quiet && !o.json) {
@@ -422,14 +429,16 @@ void run_benchmark(const BenchmarkOptions& o) {
   if (all_static.cases > 0 && all_moving.cases > 0) groups.push_back(overall);
 
   const bool plotted = !o.no_plot && plot_stage_times(out / "timing.csv", out / "stage_times.png");
-  io::write_file(out / "report.md", report_markdown(o, cases, groups, wall_s, config_text, plotted));
+  io::write_file(out / "report.md",
+                 report_markdown(o, cases, groups, wall_s, config_text, plotted));
 
   nlohmann::ordered_json j;
   j["ringtrack"] = kVersion;
   j["date"] = utc_now();
   j["machine"] = machine_description();
   j["seed"] = o.seed;
-  j["duration_s"] = o.duration_s ? nlohmann::ordered_json(*o.duration_s) : nlohmann::ordered_json(nullptr);
+  j["duration_s"] =
+      o.duration_s ? nlohmann::ordered_json(*o.duration_s) : nlohmann::ordered_json(nullptr);
   j["threshold_m"] = case_options.evaluation.threshold_m;
   j["wall_s"] = wall_s;
   j["cases"] = nlohmann::ordered_json::array();

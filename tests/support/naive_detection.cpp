@@ -63,7 +63,11 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
   const Eigen::Isometry3d world_T_sensor = pose.isometry();
   std::vector<core::Detection> out;
   for (auto& [root, cells] : components) {
-    if (cells.size() < static_cast<std::size_t>(config.min_cluster_points)) continue;
+    // Below min_cluster_points a cluster can only be relaxed, from relaxed_min_cluster_points.
+    const bool small = cells.size() < static_cast<std::size_t>(config.min_cluster_points);
+    if (small && cells.size() < static_cast<std::size_t>(config.relaxed_min_cluster_points)) {
+      continue;
+    }
     std::vector<Eigen::Vector3d> world;
     bool edge_ring = false;
     double range_sum = 0;
@@ -91,7 +95,7 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
         std::sqrt((max_x - min_x) * (max_x - min_x) + (max_y - min_y) * (max_y - min_y));
     const double gap =
         range_sum / n * std::tan(config.min_height_ring_gap_deg * std::numbers::pi / 180.0);
-    const bool strict = min_z <= config.max_altitude_m && height <= config.max_height_m &&
+    const bool strict = !small && min_z <= config.max_altitude_m && height <= config.max_height_m &&
                         diagonal <= config.max_diagonal_m &&
                         (edge_ring || height + gap >= config.min_height_m);
     bool near = false;

@@ -15,7 +15,9 @@ namespace ringtrack::testing {
 
 /// Detections as paper III.C defines them: two segment points (label 1, valid) are linked when
 /// their grid distance |d_ring| + circular |d_column| is at most neighbor_radius and the join
-/// rule holds; clusters are the connected components; the object model then filters them.
+/// rule holds; clusters are the connected components; the object model then filters them
+/// (clusters below min_cluster_points only as relaxed detections, from
+/// relaxed_min_cluster_points points).
 /// Ordered by smallest grid index, indices ascending. O(segment points^2).
 std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
                                           const std::vector<std::uint8_t>& labels,

@@ -152,6 +152,10 @@ class Schema {
            "(authors' code, robust to the sparse vertical spacing far away) or their 3-D distance (the paper)");
     number("join_distance_m", d.join_distance_m, 0.0, 100.0, "theta of region growing (m)");
     integer("min_cluster_points", d.min_cluster_points, 1, 100000, "smaller clusters are dropped");
+    integer("relaxed_min_cluster_points", d.relaxed_min_cluster_points, 1, 1000000,
+            "a cluster smaller than min_cluster_points but with at least this many points is "
+            "kept as a relaxed detection when it lies near a predicted track (it confirms, never "
+            "starts, a track); >= min_cluster_points disables this");
     number("min_height_m", d.min_height_m, 0.0, 100.0,
            "object model: smallest vertical extent (m); not applied to clusters touching the top or bottom ring");
     number("max_height_m", d.max_height_m, 0.0, 100.0, "object model: largest vertical extent (m)");

@@ -32,7 +32,9 @@ struct DetectionConfig {
   int neighbor_radius{3};            // Manhattan radius of the grid neighbourhood, in cells
   JoinRule join_rule{JoinRule::kRangeDifference};
   double join_distance_m{0.5};       // theta: the largest distance (or range difference) joined
-  int min_cluster_points{3};         // smaller clusters are dropped
+  int min_cluster_points{3};         // smaller clusters are dropped ...
+  int relaxed_min_cluster_points{2};  // ... unless this big and near a prediction (relaxed):
+                                      // far people are hit by one or two beams
   double min_height_m{0.8};          // object model: vertical extent range
   double max_height_m{2.3};
   double min_height_ring_gap_deg{2.0};  // min-height test credits range*tan(this): sparse rings
@@ -65,17 +67,17 @@ struct TrackingConfig {
   double gate_mahalanobis{4.0};    // ... above this Mahalanobis distance (sigmas)
   double gate_euclidean_m{1.0};    // ... above this distance (m)
   double process_noise{0.2};       // white-acceleration spectral density q (m^2/s^3)
-  VerticalMotion vertical_motion{VerticalMotion::kConstantVelocity};  // z like x and y: the
-                                   // centroid height drifts as rings sweep an approaching person
+  VerticalMotion vertical_motion{VerticalMotion::kConstantPosition};  // a z velocity fitted to
+                                   // ring jumps drifts coasting tracks up or into the ground
   double vertical_position_noise{0.5};  // constant_position: z random-walk density (m^2/s)
   double initial_velocity_stddev_mps{1.5};  // velocity prior of a new hypothesis
-  double measurement_covariance_scale{1.0};  // detection covariance times this is the noise R
+  double measurement_covariance_scale{0.5};  // detection covariance times this is the noise R
   double delete_eigenvalue_m2{1.0};  // delete when a position-covariance eigenvalue exceeds this
   double merge_distance_m{0.3};    // younger hypotheses this close to older ones are deleted
   double min_speed_kmh{1.0};       // reported speeds up to this are reported as zero
-  double max_speed_kmh{10.0};      // speeds are capped here (state and report)
-  double dynamic_min_distance_m{0.3};  // besides disjoint footprints, the centre must move this far
-  int dynamic_confirm_scans{1};    // ... in this many consecutive strict detections
+  double max_speed_kmh{15.0};      // speeds are capped here (state and report)
+  double dynamic_min_distance_m{1.0};  // besides disjoint footprints, the centre must move this far
+  int dynamic_confirm_scans{5};    // ... in this many consecutive strict detections
   int rest_scans_to_static{30};    // dynamic hypotheses at rest this long turn static (0 = never)
 };
 

@@ -156,11 +156,14 @@ core::Detection& Detector::next_detection() {
 
 void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame) {
   const std::size_t n = cluster_.size();
-  if (n < static_cast<std::size_t>(config_.min_cluster_points)) {
+  // A cluster below min_cluster_points may still confirm a track (a far person hit by one or
+  // two beams) when it has relaxed_min_cluster_points and lies near a prediction.
+  const bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
+  if (small && (n < static_cast<std::size_t>(config_.relaxed_min_cluster_points) ||
+                frame.predictions->empty())) {
     ++stats_.too_small;
     return;
   }
-  ++stats_.clusters;
 
   const float* range = scan.ranges().data();
   const float* x = scan.xs().data();
@@ -200,7 +203,7 @@ void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& fr
   const bool too_wide = diagonal > config_.max_diagonal_m;
   const bool too_short = !touches_top_or_bottom && height + height_allowance < config_.min_height_m;
   bool relaxed = false;
-  if (too_high || too_tall || too_wide || too_short) {
+  if (small || too_high || too_tall || too_wide || too_short) {
     bool near_prediction = false;
     const double r2 = config_.relaxed_radius_m * config_.relaxed_radius_m;
     for (const Eigen::Vector3f& p : *frame.predictions) {
@@ -214,6 +217,11 @@ void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& fr
     if (near_prediction && !too_high && !too_tall && diagonal <= config_.relaxed_max_diagonal_m) {
       relaxed = true;
     } else {
+      if (small) {
+        ++stats_.too_small;
+        return;
+      }
+      ++stats_.clusters;
       if (too_high) {
         ++stats_.too_high;
       } else if (too_tall) {
@@ -227,6 +235,7 @@ void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& fr
     }
   }
 
+  if (!small) ++stats_.clusters;
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (std::size_t k = 0; k < n; ++k) {
     const Eigen::Vector3d d = world_[k] - mean;

@@ -27,7 +27,8 @@ struct DetectorStats {
   std::size_t too_tall{0};        ///< vertical extent above max_height_m
   std::size_t too_wide{0};        ///< horizontal diagonal above the model's maximum
   std::size_t too_short{0};       ///< vertical extent (plus ring-gap allowance) below min_height_m
-  std::size_t relaxed{0};         ///< accepted by the relaxed model only
+  std::size_t relaxed{0};         ///< accepted by the relaxed model only (also clusters of
+                                  ///< relaxed_min_cluster_points..min_cluster_points-1 points)
   std::size_t detections{0};      ///< accepted clusters (strict and relaxed)
 };
 
@@ -45,7 +46,8 @@ struct DetectorStats {
 /// range * tan(min_height_ring_gap_deg) (sparse rings under-sample height). A cluster that fails
 /// this strict model but whose centroid lies within relaxed_radius_m (horizontally) of a
 /// predicted track position is tested without the minimum height and with
-/// relaxed_max_diagonal_m; it is flagged relaxed.
+/// relaxed_max_diagonal_m; it is flagged relaxed. Clusters with fewer than min_cluster_points
+/// but at least relaxed_min_cluster_points points can only be accepted this way.
 ///
 /// Cost: O(cells / 8) to find the segment points plus O(segment points * window cells); the
 /// buffers live in the detector, so steady-state calls do not allocate.

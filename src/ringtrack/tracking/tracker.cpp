@@ -26,6 +26,27 @@ double max_eigenvalue(const Eigen::Matrix3d& m) {
   return solver.eigenvalues().maxCoeff();
 }
 
+// The eigenvalue the deletion test compares. With a random-walk height the vertical variance
+// measures the rings' spread, not whether the object is still where the track thinks: only the
+// horizontal block decides then.
+double deletion_eigenvalue(const core::TrackingConfig& config, Eigen::Matrix3d p) {
+  if (config.vertical_motion == core::VerticalMotion::kConstantPosition) {
+    p.row(2).setZero();
+    p.col(2).setZero();
+  }
+  return max_eigenvalue(p);
+}
+
+// One prediction as the tracker does it (the vertical model included).
+void predict_filter(const core::TrackingConfig& config, ConstantVelocityKalman& filter,
+                    double dt_s) {
+  filter.predict(dt_s, config.process_noise);
+  if (config.vertical_motion == core::VerticalMotion::kConstantPosition) {
+    filter.hold_vertical_velocity();
+    filter.add_vertical_variance(config.vertical_position_noise * dt_s);
+  }
+}
+
 bool footprints_intersect(const core::Box3& a, const core::Box3& b) {
   if (a.empty() || b.empty()) return true;  // nothing to compare: no evidence of motion
   return a.min.x() <= b.max.x() && b.min.x() <= a.max.x() && a.min.y() <= b.max.y() &&
@@ -168,11 +189,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
 void Tracker::predict_all(double dt_s) {
   for (auto& h : hypotheses_) {
     const Eigen::Vector3d before = h.filter.position();
-    h.filter.predict(dt_s, config_.process_noise);
-    if (config_.vertical_motion == core::VerticalMotion::kConstantPosition) {
-      h.filter.hold_vertical_velocity();
-      h.filter.add_vertical_variance(config_.vertical_position_noise * dt_s);
-    }
+    predict_filter(config_, h.filter, dt_s);
     // A missed object's box follows the prediction; a corrected one is replaced below.
     h.box = h.box.translated((h.filter.position() - before).cast<float>());
     ++h.age_scans;
@@ -242,16 +259,8 @@ void Tracker::create(const core::Detection& d, int index) {
 
 void Tracker::delete_uncertain() {
   const auto before = hypotheses_.size();
-  // With a random-walk height the vertical variance measures the rings' spread, not whether
-  // the object is still where the track thinks: only the horizontal block decides.
-  const bool horizontal = config_.vertical_motion == core::VerticalMotion::kConstantPosition;
   std::erase_if(hypotheses_, [&](const Hypothesis& h) {
-    Eigen::Matrix3d p = h.position_covariance();
-    if (horizontal) {
-      p.row(2).setZero();
-      p.col(2).setZero();
-    }
-    return max_eigenvalue(p) > config_.delete_eigenvalue_m2;
+    return deletion_eigenvalue(config_, h.position_covariance()) > config_.delete_eigenvalue_m2;
   });
   stats_.deleted_uncertain = static_cast<int>(before - hypotheses_.size());
 }
@@ -331,15 +340,20 @@ void Tracker::classify(Hypothesis& h) const {
 
 int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r,
                                 double dt_s, int updates) {
+  const bool flat = config.vertical_motion == core::VerticalMotion::kConstantPosition;
   ConstantVelocityKalman filter(Eigen::Vector3d::Zero(), r, config.initial_velocity_stddev_mps);
+  if (flat) filter.hold_vertical_velocity();
   for (int u = 0; u < updates; ++u) {
-    filter.predict(dt_s, config.process_noise);
+    predict_filter(config, filter, dt_s);
     filter.update(Eigen::Vector3d::Zero(), r);
+    if (flat) filter.hold_vertical_velocity();
   }
   constexpr int kLimit = 1000000;
   for (int missed = 1; missed <= kLimit; ++missed) {
-    filter.predict(dt_s, config.process_noise);
-    if (max_eigenvalue(filter.position_covariance()) > config.delete_eigenvalue_m2) return missed;
+    predict_filter(config, filter, dt_s);
+    if (deletion_eigenvalue(config, filter.position_covariance()) > config.delete_eigenvalue_m2) {
+      return missed;
+    }
   }
   return kLimit;
 }

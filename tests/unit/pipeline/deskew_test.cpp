@@ -2,12 +2,13 @@
 // Every ground return, deskewed and mapped with the scan pose, must lie on z = 0 within the
 // range noise; without compensation the scan is visibly skewed.
 
+#include "ringtrack/pipeline/deskew.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "ringtrack/core/error.hpp"
-#include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/sim/simulator.hpp"
 
 namespace ringtrack {

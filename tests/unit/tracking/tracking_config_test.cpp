@@ -46,7 +46,7 @@ TEST(TrackingConfig, RejectsBadValuesByName) {
   expect_error("tracking:\n  gate_bhattacharyya: 0\n", "tracking.gate_bhattacharyya");
   expect_error("tracking:\n  process_noise: -1\n", "tracking.process_noise");
   expect_error("tracking:\n  rest_scans_to_static: 1.5\n", "tracking.rest_scans_to_static");
-  expect_error("tracking:\n  min_speed_kmh: 12\n", "min_speed_kmh");
+  expect_error("tracking:\n  min_speed_kmh: 16\n", "min_speed_kmh");  // above max (15)
   expect_error("mapping:\n  voxel_size_m: 0\n", "mapping.voxel_size_m");
   expect_error("mapping:\n  log_delay_scans: -1\n", "mapping.log_delay_scans");
   expect_error("mapping:\n  nope: 1\n", "mapping.nope");
