@@ -1,7 +1,8 @@
 #pragma once
-// Monotone bucketing of non-negative floats by their bit pattern: 512 buckets per doubling
-// (0.2 % relative width, 2 mm at 1 m), so a bucket brackets its values to [lower, upper). Finer
-// buckets give tighter brackets but make the rank pointers walk more; 512 measured best.
+// Monotone bucketing of non-negative floats by their bit pattern: 1024 buckets per doubling
+// (0.1 % relative width, 1 mm at 1 m, 6 cm at 64 m), so a bucket brackets its values to
+// [lower, upper). Finer buckets give tighter brackets but make the rank pointers walk more;
+// 512-4096 per doubling were measured, 1024 was best on the hard, open-field and park scans.
 
 #include <bit>
 #include <cstdint>
@@ -11,7 +12,7 @@ namespace ringtrack::segmentation::detail {
 
 class RangeBuckets {
  public:
-  static constexpr int kMantissaBits = 9;
+  static constexpr int kMantissaBits = 10;
   static constexpr int kShift = 23 - kMantissaBits;
   static constexpr float kLowest = 0.0625f;  // 2^-4: smaller values share bucket 0
   static constexpr float kHighest = 512.0f;  // 2^9: larger values share the last bucket

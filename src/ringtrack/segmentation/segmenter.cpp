@@ -231,7 +231,7 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
       if (background_hi - noise_lo < config_.delta_min_m) continue;
       int label = decide(noise_lo, noise.upper(), background.lower(), background_hi, config_);
       if (label < 0) {
-        // 2) The buckets (0.2 % wide) of the exact medians: first the noise median, whose window
+        // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window
         // is the narrow, cheap one, then if still needed the background median.
         ++stats_.bucket_decisions;
         const auto nb = noise.median_bucket(c, rn);
