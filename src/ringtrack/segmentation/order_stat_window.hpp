@@ -46,13 +46,12 @@ class OrderStatWindow {
     lo_.rank = lo;
     hi_.rank = hi;
   }
-  /// Bucket holding `rank` and the number of keys below that bucket, found by walking from the
-  /// lower tracked pointer (cheap when rank is near it).
-  [[nodiscard]] std::pair<std::uint32_t, int> bucket_of_rank(int rank) {
-    Pointer p = lo_;
-    p.rank = rank;
-    settle(p);
-    return {p.bucket, p.below};
+  /// Makes the lower tracked pointer follow `rank` and returns its bucket and the keys below it:
+  /// for a window that moves with the queried point, so the pointer only walks a little.
+  [[nodiscard]] std::pair<std::uint32_t, int> track_rank(int rank) {
+    lo_.rank = rank;
+    settle(lo_);
+    return {lo_.bucket, lo_.below};
   }
   /// Bucket holding the lower tracked rank. Pointers settle lazily, only when read: the window
   /// jitters back and forth, so most of the movement cancels out before anyone looks.

@@ -27,6 +27,9 @@ struct Segmenter::Tables {
   std::vector<float> scratch;
   OrderStatWindow noise_window{RangeBuckets::kCount};
   OrderStatWindow background_window{RangeBuckets::kCount};
+  // Exact windows of the points the brackets leave open; they follow those points along the ring.
+  OrderStatWindow noise_exact_window{RangeBuckets::kCount};
+  OrderStatWindow background_exact_window{RangeBuckets::kCount};
 };
 
 namespace {
@@ -112,15 +115,11 @@ struct FilterState {
     return hi;
   }
 
-  // Bucket of the median of point j's own window (radius r) and the keys below that bucket: the
-  // reference is reshaped to that window for the query and back, O(max(|r - rho|, |j - centre|)).
+  // For an exact window: becomes point j's own window (radius r), cheap when the previous query
+  // was nearby, and returns the bucket of its median and the keys below that bucket.
   std::pair<std::uint32_t, int> median_bucket(int j, int r) {
-    if (r == rho && j == centre) return window->bucket_of_rank(r);
-    const int old_left = left, old_right = right;
     reshape(j - r, j + r);
-    const auto result = window->bucket_of_rank(r);
-    reshape(old_left, old_right);
-    return result;
+    return window->track_rank(r);
   }
 
   void clear() {
@@ -212,6 +211,8 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     }
     FilterState noise{&t.noise_window, t.key.data()};
     FilterState background{&t.background_window, t.key.data()};
+    FilterState noise_exact{&t.noise_exact_window, t.key.data()};
+    FilterState background_exact{&t.background_exact_window, t.key.data()};
     const int last = pad + n - 1;
     for (int col = 0; col < n; ++col) {
       const int c = col + pad;
@@ -234,12 +235,12 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
         // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window
         // is the narrow, cheap one, then if still needed the background median.
         ++stats_.bucket_decisions;
-        const auto nb = noise.median_bucket(c, rn);
+        const auto nb = noise_exact.median_bucket(c, rn);
         const float noise_median_lo = RangeBuckets::lower(nb.first);
         const float noise_median_hi = RangeBuckets::upper(nb.first);
         label = decide(noise_median_lo, noise_median_hi, background.lower(), background_hi, config_);
         if (label < 0) {
-          const auto bb = background.median_bucket(c, rb);
+          const auto bb = background_exact.median_bucket(c, rb);
           label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(bb.first),
                          RangeBuckets::upper(bb.first), config_);
           if (label < 0) {
@@ -253,8 +254,7 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
       }
       if (label == 1) labels[i] = kSegment;
     }
-    noise.clear();
-    background.clear();
+    for (auto* f : {&noise, &background, &noise_exact, &background_exact}) f->clear();
   }
 }
 
