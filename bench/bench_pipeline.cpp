@@ -49,4 +49,7 @@ void BM_PipelineScan(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(BM_PipelineScan)->Unit(benchmark::kMillisecond)->Repetitions(5)->ReportAggregatesOnly(true);
+BENCHMARK(BM_PipelineScan)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);

@@ -6,7 +6,8 @@
 namespace ringtrack::cli {
 
 void register_dump_config(CLI::App& app) {
-  auto* cmd = app.add_subcommand("dump-config", "print the effective configuration: every key, value and meaning");
+  auto* cmd = app.add_subcommand("dump-config",
+                                 "print the effective configuration: every key, value and meaning");
   auto options = std::make_shared<ConfigOptions>();
   options->add_to(*cmd);
   cmd->callback([options] { std::cout << core::dump_config(options->load()); });

@@ -1,5 +1,7 @@
 // `ringtrack run INPUT --out DIR`: the whole pipeline over a recorded sequence, with its outputs.
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -8,7 +10,6 @@
 #include <filesystem>
 #include <memory>
 #include <set>
-#include <unistd.h>
 
 #include "commands.hpp"
 #include "ringtrack/core/error.hpp"
@@ -28,7 +29,9 @@ namespace fs = std::filesystem;
 
 // Set by Ctrl-C: the run stops after the current scan and closes every output properly.
 std::atomic<bool> g_interrupted{false};
-extern "C" void on_interrupt(int) { g_interrupted.store(true); }
+extern "C" void on_interrupt(int) {
+  g_interrupted.store(true);
+}
 
 struct RunOptions {
   std::string input;
@@ -75,7 +78,8 @@ double percentile(std::vector<double> values, double q) {
 }
 
 // One status line on stderr: scans done, rate and, when the total is known, the time left.
-void print_progress(std::size_t done, std::size_t total, std::chrono::steady_clock::time_point start) {
+void print_progress(std::size_t done, std::size_t total,
+                    std::chrono::steady_clock::time_point start) {
   const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   const double rate = s > 0 ? static_cast<double>(done) / s : 0.0;
   if (total > 0) {
@@ -87,9 +91,11 @@ void print_progress(std::size_t done, std::size_t total, std::chrono::steady_clo
 }
 
 // The scan with the cells the filter removed marked invalid: what the static map was built from.
-core::OrganizedScan without_cells(const core::OrganizedScan& scan, std::span<const std::uint32_t> cells) {
+core::OrganizedScan without_cells(const core::OrganizedScan& scan,
+                                  std::span<const std::uint32_t> cells) {
   core::OrganizedScan out = scan;
-  for (auto i : cells) out.set_invalid(out.ring_of(i), out.column_of(i), core::ReturnStatus::kNoReturn);
+  for (auto i : cells)
+    out.set_invalid(out.ring_of(i), out.column_of(i), core::ReturnStatus::kNoReturn);
   return out;
 }
 
@@ -97,7 +103,8 @@ core::OrganizedScan without_cells(const core::OrganizedScan& scan, std::span<con
 class RunInput {
  public:
   explicit RunInput(const RunOptions& o) {
-    if (std::filesystem::is_directory(o.input) && !is_rosbag2_folder(o.input) && o.format == "auto") {
+    if (std::filesystem::is_directory(o.input) && !is_rosbag2_folder(o.input) &&
+        o.format == "auto") {
       io::SequenceReadOptions read_options;
       if (!o.poses.empty()) {
         read_options.poses = o.poses;
@@ -115,7 +122,8 @@ class RunInput {
     source_ = io::open_scan_source(o.input, source_options);
     if (!o.poses.empty()) {
       if (o.poses_format != "tum") {
-        throw core::InputError(o.poses + ": only TUM poses (with stamps) can be matched to a sensor recording");
+        throw core::InputError(
+            o.poses + ": only TUM poses (with stamps) can be matched to a sensor recording");
       }
       trajectory_ = io::read_tum(o.poses);
     }
@@ -138,8 +146,8 @@ class RunInput {
     pose.stamp_ns = scan.stamp_ns;
     if (!trajectory_.empty()) {
       if (!trajectory_.covers(scan.stamp_ns)) {
-        throw core::InputError("--poses: no pose around scan " + std::to_string(index) + " at stamp " +
-                               std::to_string(scan.stamp_ns) + " ns");
+        throw core::InputError("--poses: no pose around scan " + std::to_string(index) +
+                               " at stamp " + std::to_string(scan.stamp_ns) + " ns");
       }
       pose = trajectory_.at(scan.stamp_ns);
     }
@@ -226,32 +234,38 @@ void run(const RunOptions& o) {
   }
   io::write_ply(out / "static_map.ply", xyz, intensity);
 
-  if (const auto summary = input.summary(); !summary.empty()) std::printf("input            %s\n", summary.c_str());
+  if (const auto summary = input.summary(); !summary.empty())
+    std::printf("input            %s\n", summary.c_str());
   std::printf("scans            %zu%s\n", total_ms.size(),
               g_interrupted.load() ? " (interrupted: the outputs cover these scans only)" : "");
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
   std::printf("static map       %zu voxels\n", map_points.size());
   std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", percentile(total_ms, 0.5),
               percentile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
-  std::printf("outputs          %s/{tracks.csv,timing.csv,static_map.ply,config.yaml%s}\n", o.out.c_str(),
-              o.filtered_scans ? ",filtered/" : "");
+  std::printf("outputs          %s/{tracks.csv,timing.csv,static_map.ply,config.yaml%s}\n",
+              o.out.c_str(), o.filtered_scans ? ",filtered/" : "");
 }
 
 }  // namespace
 
 void register_run(CLI::App& app) {
-  auto* cmd = app.add_subcommand("run", "run the pipeline over a sequence folder or a folder of organized PCD files");
+  auto* cmd = app.add_subcommand(
+      "run", "run the pipeline over a sequence folder or a folder of organized PCD files");
   auto o = std::make_shared<RunOptions>();
-  cmd->add_option("input", o->input,
-                  "sequence folder or folder of organized PCD files (docs/formats.md), .pcap/.pcapng, "
-                  ".bag, rosbag2 folder, or udp://HOST:PORT (docs/inputs.md)")
+  cmd->add_option(
+         "input", o->input,
+         "sequence folder or folder of organized PCD files (docs/formats.md), .pcap/.pcapng, "
+         ".bag, rosbag2 folder, or udp://HOST:PORT (docs/inputs.md)")
       ->required();
-  cmd->add_option("--format", o->format, "input format: auto (from the name), pcap, udp, rosbag1, rosbag2");
+  cmd->add_option("--format", o->format,
+                  "input format: auto (from the name), pcap, udp, rosbag1, rosbag2");
   cmd->add_option("--topic", o->topic, "bag topic (default: the first supported one)");
   cmd->add_option("--out", o->out, "output folder (created)")->required();
-  cmd->add_option("--poses", o->poses, "sensor poses (sensor in world; replaces a sequence's poses.txt)")
+  cmd->add_option("--poses", o->poses,
+                  "sensor poses (sensor in world; replaces a sequence's poses.txt)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("--poses-format", o->poses_format, "tum (t x y z qx qy qz qw) or kitti (3x4 per scan)")
+  cmd->add_option("--poses-format", o->poses_format,
+                  "tum (t x y z qx qy qz qw) or kitti (3x4 per scan)")
       ->check(CLI::IsMember({"tum", "kitti"}));
   cmd->add_flag("--filtered-scans", o->filtered_scans,
                 "also write each scan without its dynamic-object points as filtered/NNNNNN.pcd");

@@ -3,7 +3,8 @@
 namespace ringtrack::cli {
 
 void ConfigOptions::add_to(CLI::App& command) {
-  command.add_option("--config", file, "YAML file with configuration overrides")->check(CLI::ExistingFile);
+  command.add_option("--config", file, "YAML file with configuration overrides")
+      ->check(CLI::ExistingFile);
   command.add_option("--set", overrides, "override one key: section.key=value (repeatable)");
 }
 

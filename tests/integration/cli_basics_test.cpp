@@ -46,9 +46,7 @@ TEST(CliBasics, ShippedDefaultConfigMatchesDumpConfig) {
 
 TEST(CliBasics, UnknownKeyFailsNamingTheKey) {
   const std::string dir = testing::make_temp_dir("ringtrack-cli-");
-  {
-    std::ofstream(dir + "/bad.yaml") << "segmentation:\n  max_widht_m: 1.0\n";
-  }
+  { std::ofstream(dir + "/bad.yaml") << "segmentation:\n  max_widht_m: 1.0\n"; }
   const auto r = run_command(kCli + " dump-config --config " + dir + "/bad.yaml");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_TRUE(r.out.empty());

@@ -46,13 +46,16 @@ std::string RunCli::dir_;
 
 TEST_F(RunCli, WritesEveryOutputWithItsSchema) {
   const std::string out = dir_ + "/out";
-  const auto r = run_command(kCli + " run " + dir_ + "/seq --out " + out + " --filtered-scans --set mapping.voxel_size_m=0.2");
+  const auto r = run_command(kCli + " run " + dir_ + "/seq --out " + out +
+                             " --filtered-scans --set mapping.voxel_size_m=0.2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("scans            30"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("ms per scan"), std::string::npos);
   EXPECT_EQ(first_line(out + "/tracks.csv"), io::kTracksCsvHeader);
   EXPECT_GT(line_count(out + "/tracks.csv"), 30u);
-  EXPECT_EQ(first_line(out + "/timing.csv").rfind("scan,stamp,segmentation_ms,detection_ms,tracking_ms,mapping_ms", 0), 0u)
+  EXPECT_EQ(first_line(out + "/timing.csv")
+                .rfind("scan,stamp,segmentation_ms,detection_ms,tracking_ms,mapping_ms", 0),
+            0u)
       << first_line(out + "/timing.csv");
   EXPECT_EQ(line_count(out + "/timing.csv"), 31u);
   EXPECT_EQ(first_line(out + "/static_map.ply"), "ply");
@@ -71,10 +74,9 @@ TEST_F(RunCli, MissingInputIsOneLineError) {
 }
 
 TEST_F(RunCli, MalformedPosesFileIsOneLineErrorNamingTheLine) {
-  {
-    std::ofstream(dir_ + "/bad_poses.txt") << "0 0 0 0 0 0 0 1\n0.1 1 2 nan 0 0 0 1\n";
-  }
-  const auto r = run_command(kCli + " run " + dir_ + "/seq --out " + dir_ + "/o3 --poses " + dir_ + "/bad_poses.txt");
+  { std::ofstream(dir_ + "/bad_poses.txt") << "0 0 0 0 0 0 0 1\n0.1 1 2 nan 0 0 0 1\n"; }
+  const auto r = run_command(kCli + " run " + dir_ + "/seq --out " + dir_ + "/o3 --poses " + dir_ +
+                             "/bad_poses.txt");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("bad_poses.txt"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
@@ -84,9 +86,10 @@ TEST_F(RunCli, UnorganizedPcdFolderIsRejected) {
   const std::string folder = dir_ + "/plain";
   fs::create_directories(folder);
   {
-    std::ofstream(folder + "/a.pcd") << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
-                                        "WIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n"
-                                        "1 2 3\n4 5 6\n";
+    std::ofstream(folder + "/a.pcd")
+        << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+           "WIDTH 2\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n"
+           "1 2 3\n4 5 6\n";
   }
   const auto r = run_command(kCli + " run " + folder + " --out " + dir_ + "/o4");
   EXPECT_EQ(r.exit_code, 1);
@@ -94,7 +97,8 @@ TEST_F(RunCli, UnorganizedPcdFolderIsRejected) {
 }
 
 TEST_F(RunCli, UnknownConfigKeyFailsBeforeAnyOutput) {
-  const auto r = run_command(kCli + " run " + dir_ + "/seq --out " + dir_ + "/o5 --set tracking.nope=1");
+  const auto r =
+      run_command(kCli + " run " + dir_ + "/seq --out " + dir_ + "/o5 --set tracking.nope=1");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("tracking.nope"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ + "/o5/tracks.csv"));

@@ -20,7 +20,8 @@ std::vector<std::uint8_t> naive_segment(const core::OrganizedScan& scan,
   std::vector<float> ring(static_cast<std::size_t>(n)), window;
   auto median = [&](int col, int r) {
     window.clear();
-    for (int k = col - r; k <= col + r; ++k) window.push_back(ring[static_cast<std::size_t>((k % n + n) % n)]);
+    for (int k = col - r; k <= col + r; ++k)
+      window.push_back(ring[static_cast<std::size_t>((k % n + n) % n)]);
     std::nth_element(window.begin(), window.begin() + r, window.end());
     return window[static_cast<std::size_t>(r)];
   };

@@ -72,26 +72,29 @@ class Schema {
 
  private:
   void number(const char* name, double& v, double lo, double hi, const std::string& doc) {
-    add(name, doc + " [" + format_double(lo) + ", " + format_double(hi) + "]",
+    add(
+        name, doc + " [" + format_double(lo) + ", " + format_double(hi) + "]",
         [&v] { return format_double(v); },
         [&v, lo, hi](const std::string& text, const std::string& where) {
           const double x = parse_double(text, where);
           if (x < lo || x > hi) {
-            throw ConfigError(where + ": " + text + " is out of range, expected " + format_double(lo) +
-                              " to " + format_double(hi));
+            throw ConfigError(where + ": " + text + " is out of range, expected " +
+                              format_double(lo) + " to " + format_double(hi));
           }
           v = x;
         });
   }
   void integer(const char* name, int& v, int lo, int hi, const std::string& doc) {
-    add(name, doc + " [" + std::to_string(lo) + ", " + std::to_string(hi) + "]",
+    add(
+        name, doc + " [" + std::to_string(lo) + ", " + std::to_string(hi) + "]",
         [&v] { return std::to_string(v); },
         [&v, lo, hi](const std::string& text, const std::string& where) {
           const double x = parse_double(text, where);
-          if (x != std::floor(x)) throw ConfigError(where + ": expected an integer, got '" + text + "'");
+          if (x != std::floor(x))
+            throw ConfigError(where + ": expected an integer, got '" + text + "'");
           if (x < lo || x > hi) {
-            throw ConfigError(where + ": " + text + " is out of range, expected " + std::to_string(lo) +
-                              " to " + std::to_string(hi));
+            throw ConfigError(where + ": " + text + " is out of range, expected " +
+                              std::to_string(lo) + " to " + std::to_string(hi));
           }
           v = static_cast<int>(x);
         });
@@ -101,7 +104,8 @@ class Schema {
               const std::string& doc) {
     std::string allowed;
     for (const auto& [n, e] : names) allowed += (allowed.empty() ? "" : " | ") + n;
-    add(name, doc + " {" + allowed + "}",
+    add(
+        name, doc + " {" + allowed + "}",
         [&v, names] {
           for (const auto& [n, e] : names) {
             if (e == v) return n;
@@ -129,27 +133,36 @@ class Schema {
     number("min_width_m", s.min_width_m, 0.0, 10.0,
            "narrowest object width (m); the noise median removes narrower groups");
     number("max_width_m", s.max_width_m, 0.01, 20.0,
-           "widest object width (m); the background median removes narrower groups, wider ones are background");
+           "widest object width (m); the background median removes narrower groups, wider ones are "
+           "background");
     integer("max_kernel_radius", s.max_kernel_radius, 1, 100000,
             "cap on a median window's half width (columns); also capped at half a ring");
     number("invalid_range_m", s.invalid_range_m, 1.0, 1e6,
-           "range given to invalid returns (m) so neighbours still see background; must exceed the sensor's max range");
+           "range given to invalid returns (m) so neighbours still see background; must exceed the "
+           "sensor's max range");
     number("delta_min_m", s.delta_min_m, -1e6, 1e6,
            "certainty is 0 below this background-minus-noise median difference (m)");
-    number("delta_low_m", s.delta_low_m, -1e6, 1e6, "certainty rises linearly to 1 at this difference (m)");
-    number("delta_high_m", s.delta_high_m, -1e6, 1e6, "certainty stays 1 up to this difference (m)");
-    number("delta_max_m", s.delta_max_m, -1e6, 1e6, "certainty falls linearly to 0 at this difference (m)");
+    number("delta_low_m", s.delta_low_m, -1e6, 1e6,
+           "certainty rises linearly to 1 at this difference (m)");
+    number("delta_high_m", s.delta_high_m, -1e6, 1e6,
+           "certainty stays 1 up to this difference (m)");
+    number("delta_max_m", s.delta_max_m, -1e6, 1e6,
+           "certainty falls linearly to 0 at this difference (m)");
     number("certainty_threshold", s.certainty_threshold, 1e-6, 1.0,
-           "a point is a segment point when its certainty is at least this (0 would make every point one)");
+           "a point is a segment point when its certainty is at least this (0 would make every "
+           "point one)");
 
     auto& d = c.detection;
     section_ = "detection";
-    integer("neighbor_radius", d.neighbor_radius, 1, 50,
-            "region growing joins segment points within this Manhattan distance on the grid (cells)");
-    choice("join_rule", d.join_rule,
-           {{"range_difference", JoinRule::kRangeDifference}, {"euclidean", JoinRule::kEuclidean}},
-           "what must stay below join_distance_m for two neighbours to join: their range difference "
-           "(authors' code, robust to the sparse vertical spacing far away) or their 3-D distance (the paper)");
+    integer(
+        "neighbor_radius", d.neighbor_radius, 1, 50,
+        "region growing joins segment points within this Manhattan distance on the grid (cells)");
+    choice(
+        "join_rule", d.join_rule,
+        {{"range_difference", JoinRule::kRangeDifference}, {"euclidean", JoinRule::kEuclidean}},
+        "what must stay below join_distance_m for two neighbours to join: their range difference "
+        "(authors' code, robust to the sparse vertical spacing far away) or their 3-D distance "
+        "(the paper)");
     number("join_distance_m", d.join_distance_m, 0.0, 100.0, "theta of region growing (m)");
     integer("min_cluster_points", d.min_cluster_points, 1, 100000, "smaller clusters are dropped");
     integer("relaxed_min_cluster_points", d.relaxed_min_cluster_points, 1, 1000000,
@@ -157,13 +170,15 @@ class Schema {
             "kept as a relaxed detection when it lies near a predicted track (it confirms, never "
             "starts, a track); >= min_cluster_points disables this");
     number("min_height_m", d.min_height_m, 0.0, 100.0,
-           "object model: smallest vertical extent (m); not applied to clusters touching the top or bottom ring");
+           "object model: smallest vertical extent (m); not applied to clusters touching the top "
+           "or bottom ring");
     number("max_height_m", d.max_height_m, 0.0, 100.0, "object model: largest vertical extent (m)");
     number("min_height_ring_gap_deg", d.min_height_ring_gap_deg, 0.0, 45.0,
            "the minimum-height test adds mean range * tan(this) to a cluster's extent, as rings "
            "this far apart see an object of height h as h minus up to two gaps (the sensor's "
            "ring spacing in degrees, VLP-16: 2; 0 tests the bare extent)");
-    number("max_diagonal_m", d.max_diagonal_m, 0.0, 100.0, "object model: largest horizontal box diagonal (m)");
+    number("max_diagonal_m", d.max_diagonal_m, 0.0, 100.0,
+           "object model: largest horizontal box diagonal (m)");
     number("max_altitude_m", d.max_altitude_m, -1e6, 1e6,
            "object model: largest world-frame z of a cluster's lowest point (m)");
     number("relaxed_max_diagonal_m", d.relaxed_max_diagonal_m, 0.0, 100.0,
@@ -245,7 +260,8 @@ class Schema {
 
 void apply_node(Config& config, const YAML::Node& root, const std::string& source) {
   if (!root || root.IsNull()) return;
-  if (!root.IsMap()) throw ConfigError(source + ": expected a mapping of sections at the top level");
+  if (!root.IsMap())
+    throw ConfigError(source + ": expected a mapping of sections at the top level");
   Schema schema(config);
   for (const auto& section : root) {
     const auto section_name = section.first.as<std::string>();
@@ -260,7 +276,8 @@ void apply_node(Config& config, const YAML::Node& root, const std::string& sourc
       const auto key = entry.first.as<std::string>();
       const std::string where = source + ": key '" + section_name + "." + key + "'";
       const Field* field = schema.find(section_name, key);
-      if (field == nullptr) throw ConfigError(source + ": unknown key '" + section_name + "." + key + "'");
+      if (field == nullptr)
+        throw ConfigError(source + ": unknown key '" + section_name + "." + key + "'");
       if (!entry.second.IsScalar()) throw ConfigError(where + ": expected a single value");
       field->set(entry.second.Scalar(), where);
     }
@@ -273,7 +290,8 @@ std::vector<ConfigKeyInfo> describe_config(const Config& config) {
   Config copy = config;
   Schema schema(copy);
   std::vector<ConfigKeyInfo> out;
-  for (const auto& f : schema.fields()) out.push_back({f.section + "." + f.name, f.get(), f.description});
+  for (const auto& f : schema.fields())
+    out.push_back({f.section + "." + f.name, f.get(), f.description});
   return out;
 }
 
@@ -328,7 +346,8 @@ void validate_config(const Config& c) {
   if (!(s.delta_min_m <= s.delta_low_m && s.delta_low_m <= s.delta_high_m &&
         s.delta_high_m <= s.delta_max_m)) {
     throw ConfigError(
-        "keys 'segmentation.delta_min_m <= delta_low_m <= delta_high_m <= delta_max_m' must be ordered");
+        "keys 'segmentation.delta_min_m <= delta_low_m <= delta_high_m <= delta_max_m' must be "
+        "ordered");
   }
   const auto& d = c.detection;
   if (!(d.min_height_m <= d.max_height_m)) {

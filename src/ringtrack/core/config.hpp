@@ -10,14 +10,14 @@ namespace ringtrack::core {
 /// removes groups narrower than min_width_m, the background median removes groups narrower than
 /// max_width_m, and points where the two differ by delta (certainty >= threshold) are segments.
 struct SegmentationConfig {
-  double min_width_m{0.1};        // narrower groups (thin poles, spikes) are noise
-  double max_width_m{1.2};        // wider groups (walls, cars) are background
-  int max_kernel_radius{450};     // cap on a median window's half width, in columns
-  double invalid_range_m{250.0};  // range given to invalid returns; must exceed the sensor's max
-  double delta_min_m{0.1};        // certainty 0 below this background-minus-noise difference
-  double delta_low_m{0.3};        // certainty rises linearly to 1 here
-  double delta_high_m{300.0};     // certainty 1 up to here (objects against the sky included)
-  double delta_max_m{400.0};      // certainty falls linearly to 0 here
+  double min_width_m{0.1};          // narrower groups (thin poles, spikes) are noise
+  double max_width_m{1.2};          // wider groups (walls, cars) are background
+  int max_kernel_radius{450};       // cap on a median window's half width, in columns
+  double invalid_range_m{250.0};    // range given to invalid returns; must exceed the sensor's max
+  double delta_min_m{0.1};          // certainty 0 below this background-minus-noise difference
+  double delta_low_m{0.3};          // certainty rises linearly to 1 here
+  double delta_high_m{300.0};       // certainty 1 up to here (objects against the sky included)
+  double delta_max_m{400.0};        // certainty falls linearly to 0 here
   double certainty_threshold{0.5};  // a point is a segment point when certainty >= this
 };
 
@@ -29,20 +29,20 @@ enum class JoinRule {
 
 /// Region growing and the object model (paper III.C).
 struct DetectionConfig {
-  int neighbor_radius{3};            // Manhattan radius of the grid neighbourhood, in cells
+  int neighbor_radius{3};  // Manhattan radius of the grid neighbourhood, in cells
   JoinRule join_rule{JoinRule::kRangeDifference};
-  double join_distance_m{0.5};       // theta: the largest distance (or range difference) joined
-  int min_cluster_points{3};         // smaller clusters are dropped ...
+  double join_distance_m{0.5};        // theta: the largest distance (or range difference) joined
+  int min_cluster_points{3};          // smaller clusters are dropped ...
   int relaxed_min_cluster_points{2};  // ... unless this big and near a prediction (relaxed):
                                       // far people are hit by one or two beams
-  double min_height_m{0.8};          // object model: vertical extent range
+  double min_height_m{0.8};           // object model: vertical extent range
   double max_height_m{2.3};
   double min_height_ring_gap_deg{2.0};  // min-height test credits range*tan(this): sparse rings
                                         // under-sample height (VLP-16 ring spacing; 0 = off)
-  double max_diagonal_m{1.3};        // largest horizontal box diagonal
-  double max_altitude_m{3.0};        // largest world z of the cluster's lowest point
-  double relaxed_max_diagonal_m{1.8};  // relaxed model near predicted tracks (no minimum height)
-  double relaxed_radius_m{0.8};      // a cluster this close to a prediction uses the relaxed model
+  double max_diagonal_m{1.3};           // largest horizontal box diagonal
+  double max_altitude_m{3.0};           // largest world z of the cluster's lowest point
+  double relaxed_max_diagonal_m{1.8};   // relaxed model near predicted tracks (no minimum height)
+  double relaxed_radius_m{0.8};  // a cluster this close to a prediction uses the relaxed model
   double min_position_stddev_m{0.03};  // floor on each axis of a detection's covariance
 };
 
@@ -67,25 +67,27 @@ struct TrackingConfig {
   double gate_mahalanobis{4.0};    // ... above this Mahalanobis distance (sigmas)
   double gate_euclidean_m{1.0};    // ... above this distance (m)
   double process_noise{0.2};       // white-acceleration spectral density q (m^2/s^3)
-  VerticalMotion vertical_motion{VerticalMotion::kConstantPosition};  // a z velocity fitted to
-                                   // ring jumps drifts coasting tracks up or into the ground
-  double vertical_position_noise{0.5};  // constant_position: z random-walk density (m^2/s)
-  double initial_velocity_stddev_mps{1.5};  // velocity prior of a new hypothesis
+  VerticalMotion vertical_motion{
+      VerticalMotion::kConstantPosition};    // a z velocity fitted to
+                                             // ring jumps drifts coasting tracks up or into the
+                                             // ground
+  double vertical_position_noise{0.5};       // constant_position: z random-walk density (m^2/s)
+  double initial_velocity_stddev_mps{1.5};   // velocity prior of a new hypothesis
   double measurement_covariance_scale{0.5};  // detection covariance times this is the noise R
-  double delete_eigenvalue_m2{1.0};  // delete when a position-covariance eigenvalue exceeds this
-  double merge_distance_m{0.3};    // younger hypotheses this close to older ones are deleted
-  double min_speed_kmh{1.0};       // reported speeds up to this are reported as zero
-  double max_speed_kmh{15.0};      // speeds are capped here (state and report)
+  double delete_eigenvalue_m2{1.0};    // delete when a position-covariance eigenvalue exceeds this
+  double merge_distance_m{0.3};        // younger hypotheses this close to older ones are deleted
+  double min_speed_kmh{1.0};           // reported speeds up to this are reported as zero
+  double max_speed_kmh{15.0};          // speeds are capped here (state and report)
   double dynamic_min_distance_m{1.0};  // besides disjoint footprints, the centre must move this far
-  int dynamic_confirm_scans{5};    // ... in this many consecutive strict detections
-  int rest_scans_to_static{30};    // dynamic hypotheses at rest this long turn static (0 = never)
+  int dynamic_confirm_scans{5};        // ... in this many consecutive strict detections
+  int rest_scans_to_static{30};  // dynamic hypotheses at rest this long turn static (0 = never)
 };
 
 /// Dynamic-object filter and static map (paper III.E).
 struct MappingConfig {
-  int log_delay_scans{50};     // filtered scans wait this many scans in the log before the map
-  double voxel_size_m{0.1};    // static-map voxel edge (one point per voxel)
-  double box_margin_m{0.1};    // boxes grow by this before points inside them are removed
+  int log_delay_scans{50};   // filtered scans wait this many scans in the log before the map
+  double voxel_size_m{0.1};  // static-map voxel edge (one point per voxel)
+  double box_margin_m{0.1};  // boxes grow by this before points inside them are removed
 };
 
 /// Every setting of the pipeline.

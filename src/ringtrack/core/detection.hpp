@@ -11,10 +11,10 @@ namespace ringtrack::core {
 
 /// One object found in one scan, in the world frame.
 struct Detection {
-  Eigen::Vector3f centroid{Eigen::Vector3f::Zero()};      ///< mean of its points, world frame
-  Eigen::Matrix3f covariance{Eigen::Matrix3f::Identity()}; ///< of its points, with a floor
-  Box3 box;                                                ///< axis-aligned, world frame
-  std::vector<std::uint32_t> indices;                      ///< grid cells (ring * columns + column)
+  Eigen::Vector3f centroid{Eigen::Vector3f::Zero()};        ///< mean of its points, world frame
+  Eigen::Matrix3f covariance{Eigen::Matrix3f::Identity()};  ///< of its points, with a floor
+  Box3 box;                                                 ///< axis-aligned, world frame
+  std::vector<std::uint32_t> indices;  ///< grid cells (ring * columns + column)
   bool relaxed{false};  ///< accepted only by the relaxed model near a predicted track
 };
 

@@ -13,8 +13,8 @@ constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
 
 OrganizedScan::OrganizedScan(int rings, int columns) : rings_(rings), columns_(columns) {
   if (rings <= 0 || columns <= 0) {
-    throw Error("organized scan: expected positive rings and columns, got " + std::to_string(rings) +
-                " x " + std::to_string(columns));
+    throw Error("organized scan: expected positive rings and columns, got " +
+                std::to_string(rings) + " x " + std::to_string(columns));
   }
   const auto n = static_cast<std::size_t>(rings) * static_cast<std::size_t>(columns);
   range_m_.assign(n, kNaN);
@@ -65,8 +65,7 @@ void OrganizedScan::set_range(const SensorModel& model, int ring, int column, fl
 }
 
 std::size_t OrganizedScan::valid_count() const {
-  return static_cast<std::size_t>(
-      std::count(status_.begin(), status_.end(), ReturnStatus::kValid));
+  return static_cast<std::size_t>(std::count(status_.begin(), status_.end(), ReturnStatus::kValid));
 }
 
 void OrganizedScan::set_uniform_columns(const SensorModel& model, std::int64_t scan_stamp_ns) {

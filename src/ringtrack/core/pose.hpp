@@ -26,7 +26,8 @@ struct Pose {
   /// Pose interpolated between a (at t=0) and b (at t=1): linear translation, slerp rotation.
   [[nodiscard]] static Pose interpolate(const Pose& a, const Pose& b, double t) {
     Pose out;
-    out.stamp_ns = a.stamp_ns + static_cast<std::int64_t>(t * static_cast<double>(b.stamp_ns - a.stamp_ns));
+    out.stamp_ns =
+        a.stamp_ns + static_cast<std::int64_t>(t * static_cast<double>(b.stamp_ns - a.stamp_ns));
     out.translation = a.translation + t * (b.translation - a.translation);
     out.rotation = a.rotation.slerp(t, b.rotation);
     return out;

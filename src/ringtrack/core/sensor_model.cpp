@@ -27,8 +27,10 @@ SensorModel from_laser_tables(std::string name, const std::vector<double>& eleva
   m.name = std::move(name);
   for (int laser : order) {
     m.elevation_rad.push_back(elevation_deg[laser] * kDegToRad);
-    m.vertical_offset_m.push_back(vertical_offset_mm.empty() ? 0.0 : vertical_offset_mm[laser] / 1000.0);
-    m.azimuth_offset_rad.push_back(azimuth_offset_deg.empty() ? 0.0 : azimuth_offset_deg[laser] * kDegToRad);
+    m.vertical_offset_m.push_back(vertical_offset_mm.empty() ? 0.0
+                                                             : vertical_offset_mm[laser] / 1000.0);
+    m.azimuth_offset_rad.push_back(
+        azimuth_offset_deg.empty() ? 0.0 : azimuth_offset_deg[laser] * kDegToRad);
     m.firing_offset_us.push_back(firing_offset_us[laser]);
     m.laser_of_ring.push_back(laser);
   }
@@ -66,15 +68,16 @@ Eigen::Vector3f SensorModel::point(int ring, double azimuth_rad, double range_m)
   const double el = elevation_rad[ring];
   const double az = azimuth_rad + azimuth_offset_rad[ring];
   const double horizontal = range_m * std::cos(el);
-  return {static_cast<float>(horizontal * std::cos(az)), static_cast<float>(horizontal * std::sin(az)),
+  return {static_cast<float>(horizontal * std::cos(az)),
+          static_cast<float>(horizontal * std::sin(az)),
           static_cast<float>(range_m * std::sin(el) + vertical_offset_m[ring])};
 }
 
 void SensorModel::validate() const {
   const auto n = elevation_rad.size();
   if (n == 0) throw Error("sensor model " + name + ": no rings");
-  if (vertical_offset_m.size() != n || azimuth_offset_rad.size() != n || laser_of_ring.size() != n ||
-      firing_offset_us.size() != n) {
+  if (vertical_offset_m.size() != n || azimuth_offset_rad.size() != n ||
+      laser_of_ring.size() != n || firing_offset_us.size() != n) {
     throw Error("sensor model " + name + ": per-ring tables differ in size from the elevations");
   }
   if (!std::is_sorted(elevation_rad.begin(), elevation_rad.end())) {
@@ -92,8 +95,8 @@ SensorModel SensorModel::vlp16(double scan_rate_hz) {
   // VLP-16 user manual: laser ids 0..15 alternate -15,1,-13,3,...; vertical corrections in mm;
   // one laser fires every 2.304 us, a full sequence of 16 takes 55.296 us.
   const std::vector<double> elevation{-15, 1, -13, 3, -11, 5, -9, 7, -7, 9, -5, 11, -3, 13, -1, 15};
-  const std::vector<double> offset_mm{11.2, -0.7, 9.7,  -2.2, 8.1, -3.7, 6.6,  -5.1,
-                                      5.1,  -6.6, 3.7,  -8.1, 2.2, -9.7, 0.7, -11.2};
+  const std::vector<double> offset_mm{11.2, -0.7, 9.7, -2.2, 8.1, -3.7, 6.6, -5.1,
+                                      5.1,  -6.6, 3.7, -8.1, 2.2, -9.7, 0.7, -11.2};
   std::vector<double> firing(16);
   for (int i = 0; i < 16; ++i) firing[i] = 2.304 * i;
   SensorModel m = from_laser_tables("VLP-16", elevation, offset_mm, {}, firing);
@@ -107,13 +110,13 @@ SensorModel SensorModel::vlp32c(double scan_rate_hz) {
   // VLP-32C user manual: elevation and azimuth offset per laser id; lasers fire in pairs every
   // 2.304 us, a sequence of 16 firings takes 55.296 us. The manual's offsets are added to the
   // packet's clockwise azimuth; ringtrack azimuths turn counter-clockwise, hence the negation.
-  const std::vector<double> elevation{-25,     -1,     -1.667, -15.639, -11.31, 0,      -0.667, -8.843,
-                                      -7.254,  0.333,  -0.333, -6.148,  -5.333, 1.333,  0.667,  -4,
-                                      -4.667,  1.667,  1,      -3.667,  -3.333, 3.333,  2.333,  -2.667,
-                                      -3,      7,      4.667,  -2.333,  -2,     15,     10.333, -1.333};
-  std::vector<double> azimuth{1.4, -4.2, 1.4, -1.4, 1.4, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4,
-                              -1.4, 4.2, -1.4, 4.2, -1.4, 1.4, -4.2, 1.4, -4.2, 4.2, -1.4,
-                              1.4, -1.4, 1.4, -1.4, 1.4, -4.2, 4.2, -1.4, 1.4, -1.4};
+  const std::vector<double> elevation{
+      -25,    -1,     -1.667, -15.639, -11.31, 0,      -0.667, -8.843, -7.254, 0.333,  -0.333,
+      -6.148, -5.333, 1.333,  0.667,   -4,     -4.667, 1.667,  1,      -3.667, -3.333, 3.333,
+      2.333,  -2.667, -3,     7,       4.667,  -2.333, -2,     15,     10.333, -1.333};
+  std::vector<double> azimuth{1.4,  -4.2, 1.4,  -1.4, 1.4,  -1.4, 4.2,  -1.4, 1.4,  -4.2, 1.4,
+                              -1.4, 4.2,  -1.4, 4.2,  -1.4, 1.4,  -4.2, 1.4,  -4.2, 4.2,  -1.4,
+                              1.4,  -1.4, 1.4,  -1.4, 1.4,  -4.2, 4.2,  -1.4, 1.4,  -1.4};
   for (double& a : azimuth) a = -a;
   std::vector<double> firing(32);
   for (int i = 0; i < 32; ++i) firing[i] = 2.304 * (i / 2);

@@ -10,16 +10,16 @@ namespace ringtrack::core {
 /// Ring elevations, offsets and firing timing of a spinning LiDAR. Rings are ordered bottom
 /// (lowest elevation) to top; `laser_of_ring` maps back to the sensor's own laser numbering.
 struct SensorModel {
-  std::string name;                       ///< e.g. "VLP-16"
-  std::vector<double> elevation_rad;      ///< per ring, ascending
-  std::vector<double> vertical_offset_m;  ///< per ring, added to z (VLP-16 beam origins differ)
-  std::vector<double> azimuth_offset_rad; ///< per ring, added to the firing azimuth (VLP-32C)
-  std::vector<int> laser_of_ring;         ///< per ring, the laser id in the sensor's data order
-  std::vector<double> firing_offset_us;   ///< per ring, time of its firing within a sequence
-  double firing_sequence_us{55.296};      ///< time of one firing sequence (one column)
-  double scan_rate_hz{10.0};              ///< revolutions per second
-  double min_range_m{0.3};                ///< closer returns are invalid
-  double max_range_m{100.0};              ///< farther returns are invalid
+  std::string name;                        ///< e.g. "VLP-16"
+  std::vector<double> elevation_rad;       ///< per ring, ascending
+  std::vector<double> vertical_offset_m;   ///< per ring, added to z (VLP-16 beam origins differ)
+  std::vector<double> azimuth_offset_rad;  ///< per ring, added to the firing azimuth (VLP-32C)
+  std::vector<int> laser_of_ring;          ///< per ring, the laser id in the sensor's data order
+  std::vector<double> firing_offset_us;    ///< per ring, time of its firing within a sequence
+  double firing_sequence_us{55.296};       ///< time of one firing sequence (one column)
+  double scan_rate_hz{10.0};               ///< revolutions per second
+  double min_range_m{0.3};                 ///< closer returns are invalid
+  double max_range_m{100.0};               ///< farther returns are invalid
 
   /// Number of rings.
   [[nodiscard]] int rings() const { return static_cast<int>(elevation_rad.size()); }

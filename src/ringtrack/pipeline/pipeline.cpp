@@ -27,7 +27,8 @@ Pipeline::Pipeline(const core::Config& config)
 const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core::Pose& pose) {
   if (tracker_.stamp_ns() != 0 && scan.stamp_ns < tracker_.stamp_ns()) {
     throw core::InputError("pipeline: scan stamp " + std::to_string(scan.stamp_ns) +
-                           " ns is older than the previous scan's " + std::to_string(tracker_.stamp_ns()) +
+                           " ns is older than the previous scan's " +
+                           std::to_string(tracker_.stamp_ns()) +
                            " ns; scans must come in time order");
   }
   const auto t0 = Clock::now();

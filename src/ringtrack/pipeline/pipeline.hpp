@@ -29,11 +29,11 @@ struct StageTimes {
 /// next call to process() or finish().
 struct FrameResult {
   std::int64_t stamp_ns{0};
-  std::span<const std::uint8_t> segment_labels;     ///< per cell: 1 segment point, 0 not
-  std::span<const core::Detection> detections;      ///< world frame
-  std::span<const tracking::Hypothesis> hypotheses; ///< after this scan's update
-  std::span<const std::uint32_t> removed_cells;     ///< cells removed as dynamic from this scan
-  std::size_t retroactive_points{0};                ///< removed from earlier scans in the log
+  std::span<const std::uint8_t> segment_labels;      ///< per cell: 1 segment point, 0 not
+  std::span<const core::Detection> detections;       ///< world frame
+  std::span<const tracking::Hypothesis> hypotheses;  ///< after this scan's update
+  std::span<const std::uint32_t> removed_cells;      ///< cells removed as dynamic from this scan
+  std::size_t retroactive_points{0};                 ///< removed from earlier scans in the log
   StageTimes times;
 };
 

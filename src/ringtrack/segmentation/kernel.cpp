@@ -6,7 +6,8 @@
 namespace ringtrack::segmentation {
 
 int KernelRadius::operator()(float range_m) const {
-  const double angle_steps = 2.0 * std::atan(width_m / (2.0 * static_cast<double>(range_m))) / azimuth_step_rad;
+  const double angle_steps =
+      2.0 * std::atan(width_m / (2.0 * static_cast<double>(range_m))) / azimuth_step_rad;
   const double r = round_up ? std::ceil(angle_steps) : std::floor(angle_steps);
   return static_cast<int>(std::min(r, static_cast<double>(cap)));
 }

@@ -30,8 +30,8 @@ RadiusTable::RadiusTable(const KernelRadius& formula) {
   for (std::uint32_t b = 0; b < buckets; ++b) {
     const float lo = b == 0 ? smallest : RangeBuckets::lower(b);
     const float hi_excl = RangeBuckets::upper(b);
-    const float hi = std::isinf(hi_excl) ? std::numeric_limits<float>::max()
-                                         : std::nextafter(hi_excl, 0.0f);
+    const float hi =
+        std::isinf(hi_excl) ? std::numeric_limits<float>::max() : std::nextafter(hi_excl, 0.0f);
     radius_at_lower_[b] = static_cast<std::uint16_t>(formula(lo));
     radius_at_upper_[b] = static_cast<std::uint16_t>(formula(hi));
   }

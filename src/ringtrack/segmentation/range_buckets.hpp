@@ -17,7 +17,8 @@ class RangeBuckets {
   static constexpr float kLowest = 0.0625f;  // 2^-4: smaller values share bucket 0
   static constexpr float kHighest = 512.0f;  // 2^9: larger values share the last bucket
   static constexpr std::uint32_t kBase = std::bit_cast<std::uint32_t>(kLowest) >> kShift;
-  static constexpr std::uint32_t kCount = (std::bit_cast<std::uint32_t>(kHighest) >> kShift) - kBase;
+  static constexpr std::uint32_t kCount =
+      (std::bit_cast<std::uint32_t>(kHighest) >> kShift) - kBase;
 
   /// Bucket of a value >= 0 (NaN-free); monotone non-decreasing in the value.
   static std::uint32_t key(float v) {

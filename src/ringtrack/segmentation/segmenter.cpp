@@ -21,8 +21,8 @@ struct Segmenter::Tables {
   int columns{0};
   int pad{0};  // radius cap: the ring is extended by this many cells on both sides
   RadiusTable noise_radius, background_radius;
-  std::vector<float> value;           // extended ring: filter ranges
-  std::vector<std::uint32_t> key;     // extended ring: their buckets
+  std::vector<float> value;                          // extended ring: filter ranges
+  std::vector<std::uint32_t> key;                    // extended ring: their buckets
   std::vector<std::uint16_t> r_noise, r_background;  // per point of the ring
   std::vector<float> scratch;
   OrderStatWindow noise_window{RangeBuckets::kCount};
@@ -38,7 +38,9 @@ namespace {
 // reference moves (see FilterState). Must not exceed the reference radius (the bracket needs ranks
 // rho - D and rho + D in a window of 2 rho + 1). Larger means fewer bracket reads but looser
 // brackets.
-int allowed_drift(int rho) { return std::min(rho, 2 + rho / 8); }
+int allowed_drift(int rho) {
+  return std::min(rho, 2 + rho / 8);
+}
 
 // One median filter's reference window over the extended ring: a histogram of the keys of
 // [left, right] = [centre - rho, centre + rho] with tracked ranks rho - D and rho + D.
@@ -56,7 +58,7 @@ struct FilterState {
   int drift{0};  // D = allowed_drift(rho)
   int centre{0};
   int left{0};
-  int right{-1};  // empty when right < left
+  int right{-1};       // empty when right < left
   float lo{0}, hi{0};  // bracket of the medians, valid when bracket_ready
   bool bracket_ready{false};
 
@@ -131,11 +133,13 @@ struct FilterState {
 
 // The exact median of the window of radius r around c, knowing its bucket and the keys below it:
 // a selection among the few window values that share the bucket.
-float median_in_bucket(const std::vector<float>& value, const std::vector<std::uint32_t>& key, int c,
-                       int r, std::pair<std::uint32_t, int> bucket, std::vector<float>& scratch) {
+float median_in_bucket(const std::vector<float>& value, const std::vector<std::uint32_t>& key,
+                       int c, int r, std::pair<std::uint32_t, int> bucket,
+                       std::vector<float>& scratch) {
   scratch.clear();
   for (int j = c - r; j <= c + r; ++j) {
-    if (key[static_cast<std::size_t>(j)] == bucket.first) scratch.push_back(value[static_cast<std::size_t>(j)]);
+    if (key[static_cast<std::size_t>(j)] == bucket.first)
+      scratch.push_back(value[static_cast<std::size_t>(j)]);
   }
   const auto nth = scratch.begin() + (r - bucket.second);
   std::nth_element(scratch.begin(), nth, scratch.end());
@@ -217,7 +221,8 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     for (int col = 0; col < n; ++col) {
       const int c = col + pad;
       const auto i = base + static_cast<std::size_t>(col);
-      if (status[i] != core::ReturnStatus::kValid || !(t.value[static_cast<std::size_t>(c)] < invalid)) {
+      if (status[i] != core::ReturnStatus::kValid ||
+          !(t.value[static_cast<std::size_t>(c)] < invalid)) {
         continue;  // invalid returns are background
       }
       const int rn = t.r_noise[static_cast<std::size_t>(col)];
@@ -238,7 +243,8 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
         const auto nb = noise_exact.median_bucket(c, rn);
         const float noise_median_lo = RangeBuckets::lower(nb.first);
         const float noise_median_hi = RangeBuckets::upper(nb.first);
-        label = decide(noise_median_lo, noise_median_hi, background.lower(), background_hi, config_);
+        label =
+            decide(noise_median_lo, noise_median_hi, background.lower(), background_hi, config_);
         if (label < 0) {
           const auto bb = background_exact.median_bucket(c, rb);
           label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(bb.first),

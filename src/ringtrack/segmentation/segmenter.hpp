@@ -12,10 +12,10 @@ namespace ringtrack::segmentation {
 
 /// Counters of the last segment() call, for benchmarks and diagnostics.
 struct SegmenterStats {
-  std::size_t points{0};           ///< valid points labelled
+  std::size_t points{0};            ///< valid points labelled
   std::size_t bucket_decisions{0};  ///< points the reference brackets left open
   std::size_t exact_decisions{0};   ///< of those, points whose exact median values were needed
-  std::size_t window_updates{0};   ///< keys added to or removed from the median windows
+  std::size_t window_updates{0};    ///< keys added to or removed from the median windows
 };
 
 /// Labels each cell of a scan as segment or background. Per ring, for every point, a noise

@@ -41,9 +41,13 @@ SimpleScene SimpleScene::demo() {
   s.ground_z_m = -1.5;
   s.wall_radius_m = 12.0;
   s.range_noise_m = 0.02;
-  s.cylinders = {person(4.0, 1.0, -1.5, 1),   person(-3.0, 5.0, -1.5, 2), person(6.0, -6.0, -1.5, 3),
-                 person(-8.0, -2.0, -1.5, 4), person(5.0, 1.8, -1.5, 5),
-                 Cylinder{2.0, -3.0, 0.03, -1.5, 2.0, 0}};  // a 6 cm pole: narrower than min_width_m
+  s.cylinders = {
+      person(4.0, 1.0, -1.5, 1),
+      person(-3.0, 5.0, -1.5, 2),
+      person(6.0, -6.0, -1.5, 3),
+      person(-8.0, -2.0, -1.5, 4),
+      person(5.0, 1.8, -1.5, 5),
+      Cylinder{2.0, -3.0, 0.03, -1.5, 2.0, 0}};  // a 6 cm pole: narrower than min_width_m
   return s;
 }
 
@@ -52,7 +56,8 @@ SimpleScene SimpleScene::hard_wall() {
   s.wall_radius_m = 1.0;
   s.range_noise_m = 0.03;
   // Close to the wall and the sensor, as in the paper's indoor hall.
-  s.cylinders = {person(0.55, 0.1, -1.5, 1), person(-0.3, 0.5, -1.5, 2), person(0.1, -0.6, -1.5, 3)};
+  s.cylinders = {person(0.55, 0.1, -1.5, 1), person(-0.3, 0.5, -1.5, 2),
+                 person(0.1, -0.6, -1.5, 3)};
   for (auto& c : s.cylinders) c.radius_m = 0.15;
   return s;
 }
@@ -64,7 +69,8 @@ SimpleScene SimpleScene::open_field(int people) {
   for (int i = 0; i < people; ++i) {
     const double a = 2.0 * std::numbers::pi * i / std::max(people, 1) + 0.3;
     const double r = 5.0 + 35.0 * i / std::max(people - 1, 1);
-    s.cylinders.push_back(person(r * std::cos(a), r * std::sin(a), -2.5, static_cast<std::uint32_t>(i + 1)));
+    s.cylinders.push_back(
+        person(r * std::cos(a), r * std::sin(a), -2.5, static_cast<std::uint32_t>(i + 1)));
   }
   return s;
 }
@@ -82,7 +88,8 @@ RenderedScan render(const core::SensorModel& model, const SimpleScene& scene) {
     const double oz = model.vertical_offset_m[ring];
     for (int col = 0; col < columns; ++col) {
       const double az = out.scan.column_azimuth_rad[col] + model.azimuth_offset_rad[ring];
-      const double dx = std::cos(el) * std::cos(az), dy = std::cos(el) * std::sin(az), dz = std::sin(el);
+      const double dx = std::cos(el) * std::cos(az), dy = std::cos(el) * std::sin(az),
+                   dz = std::sin(el);
       double best = kInf;
       std::uint32_t label = 0;
       if (scene.ground_z_m && dz < -1e-9) best = (*scene.ground_z_m - oz) / dz;

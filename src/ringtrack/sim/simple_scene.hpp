@@ -21,10 +21,10 @@ struct Cylinder {
 
 /// Ground plane, optional circular wall around the sensor and cylinders; sensor at the origin.
 struct SimpleScene {
-  std::optional<double> ground_z_m;       ///< horizontal ground plane height, if any
-  std::optional<double> wall_radius_m;    ///< a vertical wall all around at this distance
+  std::optional<double> ground_z_m;     ///< horizontal ground plane height, if any
+  std::optional<double> wall_radius_m;  ///< a vertical wall all around at this distance
   std::vector<Cylinder> cylinders;
-  double range_noise_m{0.0};              ///< Gaussian range noise (standard deviation)
+  double range_noise_m{0.0};  ///< Gaussian range noise (standard deviation)
   std::uint64_t seed{1};
 
   /// A person (1.75 m tall, 0.25 m radius) standing at (x, y) on ground at ground_z.

@@ -1,6 +1,7 @@
+#include "ringtrack/core/config.hpp"
+
 #include <gtest/gtest.h>
 
-#include "ringtrack/core/config.hpp"
 #include "ringtrack/core/error.hpp"
 
 namespace ringtrack::core {
@@ -41,7 +42,8 @@ TEST(Config, RejectsUnknownKeysAndSectionsByName) {
 }
 
 TEST(Config, RejectsOutOfRangeAndMalformedValuesByName) {
-  expect_config_error("segmentation:\n  certainty_threshold: 0\n", "segmentation.certainty_threshold");
+  expect_config_error("segmentation:\n  certainty_threshold: 0\n",
+                      "segmentation.certainty_threshold");
   expect_config_error("detection:\n  neighbor_radius: 2.5\n", "detection.neighbor_radius");
   expect_config_error("detection:\n  join_distance_m: abc\n", "detection.join_distance_m");
   expect_config_error("detection:\n  join_rule: manhattan\n", "detection.join_rule");
@@ -52,7 +54,8 @@ TEST(Config, RejectsOutOfRangeAndMalformedValuesByName) {
 
 TEST(Config, FailedLoadLeavesConfigUntouched) {
   Config c;
-  EXPECT_THROW(apply_config_yaml(c, "segmentation:\n  min_width_m: 0.2\n  nope: 1\n", "x"), ConfigError);
+  EXPECT_THROW(apply_config_yaml(c, "segmentation:\n  min_width_m: 0.2\n  nope: 1\n", "x"),
+               ConfigError);
   EXPECT_DOUBLE_EQ(c.segmentation.min_width_m, Config{}.segmentation.min_width_m);
 }
 

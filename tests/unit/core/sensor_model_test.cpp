@@ -1,3 +1,5 @@
+#include "ringtrack/core/sensor_model.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -6,7 +8,6 @@
 #include "ringtrack/core/box3.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/core/organized_scan.hpp"
-#include "ringtrack/core/sensor_model.hpp"
 
 namespace ringtrack::core {
 namespace {
@@ -18,11 +19,11 @@ TEST(SensorModel, Vlp16RingsAscendInTwoDegreeSteps) {
   m.validate();
   ASSERT_EQ(m.rings(), 16);
   for (int r = 0; r < 16; ++r) EXPECT_NEAR(m.elevation_rad[r], (-15 + 2 * r) * kDeg, 1e-12);
-  EXPECT_EQ(m.laser_of_ring[0], 0);   // -15 deg is laser 0
-  EXPECT_EQ(m.laser_of_ring[8], 1);   // +1 deg is laser 1
+  EXPECT_EQ(m.laser_of_ring[0], 0);  // -15 deg is laser 0
+  EXPECT_EQ(m.laser_of_ring[8], 1);  // +1 deg is laser 1
   EXPECT_EQ(m.ring_of_laser(15), 15);
   EXPECT_NEAR(m.azimuth_step_rad() / kDeg, 0.199, 0.001);  // 0.2 deg at 10 Hz
-  EXPECT_EQ(m.columns(), 1808);  // 1 / (10 Hz * 55.296 us) = 1808.4
+  EXPECT_EQ(m.columns(), 1808);                            // 1 / (10 Hz * 55.296 us) = 1808.4
   EXPECT_NEAR(m.vertical_offset_m[0], 0.0112, 1e-9);
 }
 
@@ -56,8 +57,8 @@ TEST(OrganizedScan, InvalidReturnsAreExplicit) {
   OrganizedScan s(m.rings(), m.columns());
   s.set_uniform_columns(m, 1000);
   EXPECT_EQ(s.valid_count(), 0u);
-  s.set_range(m, 3, 10, 0.1f, 5);     // below min range
-  s.set_range(m, 3, 11, 150.0f, 5);   // beyond max range
+  s.set_range(m, 3, 10, 0.1f, 5);    // below min range
+  s.set_range(m, 3, 11, 150.0f, 5);  // beyond max range
   s.set_range(m, 3, 12, 10.0f, 5);
   s.set_range(m, 3, 13, std::nanf(""), 5);
   EXPECT_EQ(s.status(s.index(3, 10)), ReturnStatus::kTooClose);

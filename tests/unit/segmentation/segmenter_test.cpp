@@ -1,3 +1,5 @@
+#include "ringtrack/segmentation/segmenter.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,7 +9,6 @@
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/segmentation/kernel.hpp"
 #include "ringtrack/segmentation/radius_table.hpp"
-#include "ringtrack/segmentation/segmenter.hpp"
 #include "ringtrack/sim/simple_scene.hpp"
 #include "support/naive_segmentation.hpp"
 
@@ -21,7 +22,8 @@ using core::SegmentationConfig;
 template <class F>
 OrganizedScan scan_from(int rings, int columns, F range_of) {
   OrganizedScan s(rings, columns);
-  const auto model = core::SensorModel::generic(std::vector<double>(static_cast<std::size_t>(rings), 0.0), columns);
+  const auto model = core::SensorModel::generic(
+      std::vector<double>(static_cast<std::size_t>(rings), 0.0), columns);
   for (int r = 0; r < rings; ++r) {
     for (int c = 0; c < columns; ++c) {
       const float v = range_of(r, c);
@@ -95,23 +97,25 @@ TEST(Segmenter, PersonInFrontOfWallIsSegmentedAndWallIsNot) {
   // One ring, 1800 columns (0.2 deg), wall at 8 m, a 0.5 m wide object at 4 m around column 100.
   const int n = 1800;
   const int half = static_cast<int>(std::round(std::atan(0.25 / 4.0) / (2 * std::numbers::pi / n)));
-  const auto scan = scan_from(1, n, [&](int, int c) { return std::abs(c - 100) <= half ? 4.0f : 8.0f; });
+  const auto scan =
+      scan_from(1, n, [&](int, int c) { return std::abs(c - 100) <= half ? 4.0f : 8.0f; });
   Segmenter s(SegmentationConfig{});
   std::vector<std::uint8_t> labels;
   s.segment(scan, labels);
-  for (int c = 0; c < n; ++c) EXPECT_EQ(labels[c], std::abs(c - 100) <= half ? kSegment : kBackground) << c;
+  for (int c = 0; c < n; ++c)
+    EXPECT_EQ(labels[c], std::abs(c - 100) <= half ? kSegment : kBackground) << c;
 }
 
 TEST(Segmenter, ObjectAcrossTheSeamAndAgainstTheSky) {
   // The object straddles column 0; everything else is sky (no return).
   const int n = 1800;
-  const auto scan = scan_from(1, n, [&](int, int c) {
-    return (c <= 20 || c >= n - 20) ? 5.0f : std::nanf("");
-  });
+  const auto scan =
+      scan_from(1, n, [&](int, int c) { return (c <= 20 || c >= n - 20) ? 5.0f : std::nanf(""); });
   Segmenter s(SegmentationConfig{});
   std::vector<std::uint8_t> labels;
   s.segment(scan, labels);
-  for (int c = 0; c < n; ++c) EXPECT_EQ(labels[c], (c <= 20 || c >= n - 20) ? kSegment : kBackground) << c;
+  for (int c = 0; c < n; ++c)
+    EXPECT_EQ(labels[c], (c <= 20 || c >= n - 20) ? kSegment : kBackground) << c;
 }
 
 TEST(Segmenter, ThinPoleAndWideWallAreNotSegments) {
@@ -134,7 +138,8 @@ TEST(Segmenter, MatchesNaiveOnRandomScans) {
   for (int trial = 0; trial < 6; ++trial) {
     std::uniform_real_distribution<float> u(0.3f, 120.0f);
     std::bernoulli_distribution missing(trial % 2 ? 0.3 : 0.02);
-    const auto scan = scan_from(4, 1800, [&](int, int) { return missing(rng) ? std::nanf("") : u(rng); });
+    const auto scan =
+        scan_from(4, 1800, [&](int, int) { return missing(rng) ? std::nanf("") : u(rng); });
     expect_matches_naive(scan, SegmentationConfig{});
   }
 }
@@ -168,14 +173,16 @@ TEST(Segmenter, MatchesNaiveOnAdversarialScans) {
   expect_matches_naive(ties, config);
   // Ambiguous differences right at the certainty ramp: objects 0.1-0.3 m in front of a wall.
   auto ramp = scan_from(4, 1800, [&](int r, int c) {
-    return (c % 60 < 20) ? 3.0f - 0.1f - 0.02f * static_cast<float>(r + c % 11) : 3.0f + noise(rng) * 0.1f;
+    return (c % 60 < 20) ? 3.0f - 0.1f - 0.02f * static_cast<float>(r + c % 11)
+                         : 3.0f + noise(rng) * 0.1f;
   });
   expect_matches_naive(ramp, config);
 }
 
 TEST(Segmenter, MatchesNaiveOnRenderedScenesAndOtherConfigs) {
   const auto model = core::SensorModel::vlp16();
-  for (const auto& scene : {sim::SimpleScene::hard_wall(), sim::SimpleScene::open_field(), sim::SimpleScene::demo()}) {
+  for (const auto& scene :
+       {sim::SimpleScene::hard_wall(), sim::SimpleScene::open_field(), sim::SimpleScene::demo()}) {
     const auto rendered = sim::render(model, scene);
     expect_matches_naive(rendered.scan, SegmentationConfig{});
     SegmentationConfig other;
