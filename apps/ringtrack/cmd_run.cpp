@@ -6,6 +6,7 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
+#include <deque>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -90,14 +91,47 @@ void print_progress(std::size_t done, std::size_t total,
   }
 }
 
-// The scan with the cells the filter removed marked invalid: what the static map was built from.
-core::OrganizedScan without_cells(const core::OrganizedScan& scan,
-                                  std::span<const std::uint32_t> cells) {
-  core::OrganizedScan out = scan;
-  for (auto i : cells)
-    out.set_invalid(out.ring_of(i), out.column_of(i), core::ReturnStatus::kNoReturn);
-  return out;
-}
+// Writes each scan without its dynamic-object points once the dynamic-object filter has made its
+// final decision on it, i.e. when the scan leaves the filter's log (removals are retroactive, so
+// a scan written earlier could still hold points of an object that turns dynamic later).
+class FilteredScanWriter {
+ public:
+  explicit FilteredScanWriter(fs::path folder) : folder_(std::move(folder)) {}
+
+  /// Keeps the scan (sensor frame) until the filter releases it.
+  void hold(std::size_t index, const core::OrganizedScan& scan) {
+    pending_.push_back({index, scan, next_sequence_++});
+  }
+
+  /// Writes the scans the filter released in its last call.
+  void write_released(const mapping::DynamicObjectFilter& filter) {
+    for (const auto& logged : filter.released()) {
+      while (!pending_.empty() && pending_.front().sequence < logged.sequence) pending_.pop_front();
+      if (pending_.empty() || pending_.front().sequence != logged.sequence) continue;
+      auto& held = pending_.front();
+      for (std::size_t k = 0; k < logged.cells.size(); ++k) {
+        if (logged.removed[k] == 0) continue;
+        const auto cell = logged.cells[k];
+        held.scan.set_invalid(held.scan.ring_of(cell), held.scan.column_of(cell),
+                              core::ReturnStatus::kNoReturn);
+      }
+      char name[32];
+      std::snprintf(name, sizeof name, "%06zu.pcd", held.index);
+      io::write_pcd(folder_ / name, held.scan, {});
+      pending_.pop_front();
+    }
+  }
+
+ private:
+  struct Held {
+    std::size_t index;
+    core::OrganizedScan scan;
+    std::uint64_t sequence;  // the filter's number for it: the order of processing
+  };
+  fs::path folder_;
+  std::deque<Held> pending_;
+  std::uint64_t next_sequence_{0};
+};
 
 // Scans with their poses, from a sequence folder / PCD folder or from a sensor recording or stream.
 class RunInput {
@@ -186,6 +220,8 @@ void run(const RunOptions& o) {
   }
 
   pipeline::Pipeline pipeline(config);
+  std::unique_ptr<FilteredScanWriter> filtered;
+  if (o.filtered_scans) filtered = std::make_unique<FilteredScanWriter>(out / "filtered");
   io::TracksCsvWriter tracks(out / "tracks.csv");
   io::TimingCsvWriter timing(out / "timing.csv");
   std::vector<double> total_ms;
@@ -209,10 +245,9 @@ void run(const RunOptions& o) {
     tracks.write(rows);
     timing.write(timing_row(index, scan.stamp_ns, result.times));
     total_ms.push_back(result.times.total_ms);
-    if (o.filtered_scans) {
-      char name[32];
-      std::snprintf(name, sizeof name, "%06zu.pcd", index);
-      io::write_pcd(out / "filtered" / name, without_cells(scan, result.removed_cells), {});
+    if (filtered) {
+      filtered->hold(index, scan);
+      filtered->write_released(pipeline.dynamic_filter());
     }
     if (progress) print_progress(index + 1, input.size(), start);
   }
@@ -220,6 +255,7 @@ void run(const RunOptions& o) {
   if (total_ms.empty()) throw core::InputError(o.input + ": no scans found");
   if (progress) std::fprintf(stderr, "\n");
   pipeline.finish();
+  if (filtered) filtered->write_released(pipeline.dynamic_filter());
   tracks.close();
   timing.close();
 
