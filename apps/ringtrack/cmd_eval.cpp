@@ -1,19 +1,24 @@
 // `ringtrack eval`: CLEAR MOT, MT/PT/ML and ID metrics of tracks against ground truth, per
 // sequence and summed over sequences (docs/evaluation.md).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "commands.hpp"
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/eval/map_metrics.hpp"
 #include "ringtrack/eval/tracking_eval.hpp"
 #include "ringtrack/io/mot_tables.hpp"
+#include "ringtrack/io/pcd.hpp"
+#include "ringtrack/io/sequence.hpp"
 
 namespace ringtrack::cli {
 namespace {
@@ -31,14 +36,60 @@ struct EvalOptions {
   std::int64_t min_points = 1;
   bool ignore_stamps = false;
   bool json = false;
+  std::vector<std::string> filtered;  // per sequence: `ringtrack run --filtered-scans` output
 };
 
 struct SequenceResult {
   std::string name;
   std::string gt_path;
   std::string tracks_path;
-  eval::TrackingEvalResult result;  // for MOTChallenge only `summary` is filled
+  eval::TrackingEvalResult result;     // for MOTChallenge only `summary` is filled
+  std::optional<eval::MapCounts> map;  // with --filtered
 };
+
+// Map metrics of filtered scans against the sequence's per-point labels: a point is dynamic when
+// its object moves in any scan of objects.csv (docs/evaluation.md); kept = still valid.
+eval::MapCounts evaluate_filtered(const fs::path& sequence_dir, const fs::path& objects_csv,
+                                  const fs::path& filtered_dir) {
+  std::vector<std::int64_t> dynamic_ids;
+  for (const auto& row : io::read_objects_csv(objects_csv)) {
+    if (row.moving) dynamic_ids.push_back(row.id);
+  }
+  std::sort(dynamic_ids.begin(), dynamic_ids.end());
+  dynamic_ids.erase(std::unique(dynamic_ids.begin(), dynamic_ids.end()), dynamic_ids.end());
+  io::SequenceReader reader(sequence_dir);
+  eval::MapCounts counts;
+  io::SequenceScan item;
+  while (reader.next(item)) {
+    if (item.labels.empty()) {
+      throw core::InputError(item.path.string() +
+                             ": no label field; map metrics need per-point labels");
+    }
+    char name[32];
+    std::snprintf(name, sizeof name, "%06zu.pcd", item.index);
+    const fs::path path = filtered_dir / name;
+    if (!fs::is_regular_file(path)) {
+      throw core::InputError(path.string() + ": missing filtered scan for scan " +
+                             std::to_string(item.index));
+    }
+    const auto filtered = io::read_pcd(path);
+    if (filtered.scan.rings() != item.scan.rings() ||
+        filtered.scan.columns() != item.scan.columns()) {
+      throw core::InputError(path.string() + ": grid " + std::to_string(filtered.scan.rings()) +
+                             " x " + std::to_string(filtered.scan.columns()) +
+                             " differs from the sequence's " + std::to_string(item.scan.rings()) +
+                             " x " + std::to_string(item.scan.columns()));
+    }
+    for (std::size_t i = 0; i < item.scan.size(); ++i) {
+      if (!item.scan.valid(i)) continue;
+      const auto label = static_cast<std::int64_t>(item.labels[i]);
+      const bool dynamic =
+          label > 0 && std::binary_search(dynamic_ids.begin(), dynamic_ids.end(), label);
+      counts.add_point(label, dynamic, filtered.scan.valid(i));
+    }
+  }
+  return counts;
+}
 
 // A sequence folder stands for its ground-truth file inside.
 fs::path resolve_gt(const std::string& arg, bool motchallenge, std::string& name) {
@@ -244,7 +295,18 @@ void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSum
   for (const auto& line : cells) print_line(line);
 }
 
+nlohmann::ordered_json map_json(const eval::MapCounts& m) {
+  return {{"static_points", m.static_points},           {"static_kept", m.static_kept},
+          {"dynamic_points", m.dynamic_points},         {"dynamic_removed", m.dynamic_removed},
+          {"preservation_rate", m.preservation_rate()}, {"rejection_rate", m.rejection_rate()}};
+}
+
 void run_eval(const EvalOptions& o) {
+  if (!o.filtered.empty() && o.filtered.size() != o.gt.size()) {
+    throw core::InputError("--filtered given " + std::to_string(o.filtered.size()) +
+                           " times but --gt " + std::to_string(o.gt.size()) +
+                           " times: give one filtered-scans folder per sequence, or none");
+  }
   if (o.gt.size() != o.tracks.size()) {
     throw core::InputError("--gt given " + std::to_string(o.gt.size()) + " times but --tracks " +
                            std::to_string(o.tracks.size()) +
@@ -253,6 +315,7 @@ void run_eval(const EvalOptions& o) {
   const bool mot = o.format == "motchallenge";
   std::vector<SequenceResult> sequences;
   eval::MotSummary overall;
+  eval::MapCounts overall_map;
   for (std::size_t k = 0; k < o.gt.size(); ++k) {
     SequenceResult s;
     const fs::path gt_path = resolve_gt(o.gt[k], mot, s.name);
@@ -262,11 +325,29 @@ void run_eval(const EvalOptions& o) {
     s.result = mot ? evaluate_motchallenge(gt_path, tracks_path, o)
                    : evaluate_ringtrack(gt_path, tracks_path, o);
     overall += s.result.summary;
+    if (!o.filtered.empty()) {
+      if (mot)
+        throw core::InputError(
+            "--filtered: map metrics need ringtrack sequences, not MOTChallenge");
+      s.map = evaluate_filtered(fs::path(gt_path).parent_path(), gt_path, o.filtered[k]);
+      overall_map += *s.map;
+    }
     sequences.push_back(std::move(s));
   }
 
   if (!o.json) {
     print_text(sequences, overall, o);
+    if (!o.filtered.empty()) {
+      for (const auto& s : sequences) {
+        std::printf(
+            "map %-12s preservation %.4f (%lld of %lld static points kept), rejection %.4f (%lld "
+            "of %lld dynamic points removed)\n",
+            s.name.c_str(), s.map->preservation_rate(), static_cast<long long>(s.map->static_kept),
+            static_cast<long long>(s.map->static_points), s.map->rejection_rate(),
+            static_cast<long long>(s.map->dynamic_removed),
+            static_cast<long long>(s.map->dynamic_points));
+      }
+    }
     return;
   }
   nlohmann::ordered_json out;
@@ -293,9 +374,11 @@ void run_eval(const EvalOptions& o) {
       j["hypotheses_evaluated"] = s.result.hypotheses_evaluated;
     }
     j["metrics"] = metrics_json(s.result.summary);
+    if (s.map) j["map"] = map_json(*s.map);
     out["sequences"].push_back(std::move(j));
   }
   out["overall"] = metrics_json(overall);
+  if (!o.filtered.empty()) out["overall_map"] = map_json(overall_map);
   std::cout << out.dump(2) << "\n";
 }
 
@@ -334,6 +417,10 @@ void register_eval(CLI::App& app) {
   cmd->add_flag("--ignore-stamps", o->ignore_stamps,
                 "do not require equal stamps for the same scan index in both files");
   cmd->add_flag("--json", o->json, "print JSON instead of a table");
+  cmd->add_option(
+      "--filtered", o->filtered,
+      "per sequence: the filtered/ folder of `ringtrack run --filtered-scans`; adds the "
+      "map metrics (preservation and rejection rates, docs/evaluation.md)");
   cmd->callback([o] { run_eval(*o); });
 }
 

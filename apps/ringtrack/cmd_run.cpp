@@ -6,8 +6,8 @@
 #include <atomic>
 #include <chrono>
 #include <csignal>
-#include <deque>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <memory>
 #include <set>

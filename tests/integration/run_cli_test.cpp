@@ -66,6 +66,30 @@ TEST_F(RunCli, WritesEveryOutputWithItsSchema) {
   EXPECT_NE(text.str().find("voxel_size_m: 0.2"), std::string::npos);
 }
 
+TEST_F(RunCli, FilteredScansGiveMapMetricsInEval) {
+  const std::string out = dir_ + "/out-map";
+  ASSERT_EQ(run_command(kCli + " run " + dir_ + "/seq --out " + out + " --filtered-scans --quiet")
+                .exit_code,
+            0);
+  const auto r = run_command(kCli + " eval --json --gt " + dir_ + "/seq --tracks " + out +
+                             "/tracks.csv --filtered " + out + "/filtered");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* key : {"\"overall_map\"", "\"preservation_rate\"", "\"rejection_rate\"",
+                          "\"static_points\"", "\"dynamic_points\""}) {
+    EXPECT_NE(r.out.find(key), std::string::npos) << key << "\n" << r.out;
+  }
+  // Most static points survive the filter (people walk in an empty field).
+  const auto at = r.out.find("\"preservation_rate\": ");
+  ASSERT_NE(at, std::string::npos);
+  EXPECT_GT(std::stod(r.out.substr(at + 21)), 0.99);
+  // A missing filtered scan is an error naming the file.
+  fs::remove(out + "/filtered/000005.pcd");
+  const auto bad = run_command(kCli + " eval --gt " + dir_ + "/seq --tracks " + out +
+                               "/tracks.csv --filtered " + out + "/filtered");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("000005.pcd"), std::string::npos) << bad.err;
+}
+
 TEST_F(RunCli, MissingInputIsOneLineError) {
   const auto r = run_command(kCli + " run " + dir_ + "/nothing-here --out " + dir_ + "/o2");
   EXPECT_EQ(r.exit_code, 1);
