@@ -21,6 +21,7 @@
 
 #include "benchmark_run.hpp"
 #include "commands.hpp"
+#include "output_rows.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/output_file.hpp"
@@ -360,31 +361,10 @@ void run_benchmark(const BenchmarkOptions& o) {
       case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
         const auto k = static_cast<std::uint64_t>(scan.index);
         for (const tracking::Hypothesis& h : r.hypotheses) {
-          io::TrackRow row;
-          row.scan = k;
-          row.stamp_ns = scan.scan.stamp_ns;
-          row.id = h.id;
-          row.position = h.position();
-          row.velocity = h.velocity_mps;
-          row.box = h.box;
-          row.dynamic = h.dynamic;
-          row.ever_dynamic = h.ever_dynamic;
-          row.age = static_cast<std::uint32_t>(h.age_scans);
-          row.points = static_cast<std::uint32_t>(h.points);
-          tracks_csv->write(row);
+          tracks_csv->write(track_row(k, scan.scan.stamp_ns, h));
         }
         for (const sim::ObjectTruth& t : scan.objects) {
-          io::ObjectRow row;
-          row.scan = k;
-          row.stamp_ns = scan.scan.stamp_ns;
-          row.id = t.id;
-          row.class_name = std::string(sim::class_name(t.object_class));
-          row.points = static_cast<std::uint32_t>(t.hit_points);
-          row.centroid = t.centroid_m.cast<double>();
-          row.box = t.box;
-          row.true_center = t.body_center_m.cast<double>();
-          row.moving = t.moving;
-          objects_csv->write(row);
+          objects_csv->write(object_row(k, scan.scan.stamp_ns, t));
         }
       };
     }

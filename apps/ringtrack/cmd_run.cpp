@@ -13,6 +13,7 @@
 #include <set>
 
 #include "commands.hpp"
+#include "output_rows.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/output_file.hpp"
@@ -45,21 +46,6 @@ struct RunOptions {
   bool quiet{false};
   ConfigOptions config;
 };
-
-io::TrackRow track_row(std::uint64_t scan, std::int64_t stamp_ns, const tracking::Hypothesis& h) {
-  io::TrackRow row;
-  row.scan = scan;
-  row.stamp_ns = stamp_ns;
-  row.id = h.id;
-  row.position = h.position();
-  row.velocity = h.velocity_mps;
-  row.box = h.box;
-  row.dynamic = h.dynamic;
-  row.ever_dynamic = h.ever_dynamic;
-  row.age = static_cast<std::uint32_t>(h.age_scans);
-  row.points = static_cast<std::uint32_t>(h.points);
-  return row;
-}
 
 io::TimingRow timing_row(std::uint64_t scan, std::int64_t stamp_ns, const pipeline::StageTimes& t) {
   return {scan,

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "output_rows.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/sequence.hpp"
 #include "ringtrack/sim/scenario_file.hpp"
@@ -82,15 +83,8 @@ void run_simulate(const SimulateOptions& o) {
     simulator.next(scan);
     rows.clear();
     for (const auto& t : scan.objects) {
-      io::ObjectRow r;
-      r.id = t.id;
-      r.class_name = std::string(sim::class_name(t.object_class));
-      r.points = static_cast<std::uint32_t>(t.hit_points);
-      r.centroid = t.centroid_m.cast<double>();
-      r.box = t.box;
-      r.true_center = t.body_center_m.cast<double>();
-      r.moving = t.moving;
-      rows.push_back(r);
+      // scan and stamp are set by the writer from the scan itself
+      rows.push_back(object_row(0, 0, t));
       seen += t.hit_points > 0 ? 1 : 0;
     }
     writer.add_scan(scan.scan, scan.labels, scan.pose, rows);
