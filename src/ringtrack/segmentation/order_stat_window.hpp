@@ -20,14 +20,13 @@ class OrderStatWindow {
   template <int kSign>
   void update(const std::uint32_t* first, const std::uint32_t* last) {
     static_assert(kSign == 1 || kSign == -1);
-    // Locals let the compiler keep the counters in registers across the loop.
+    for (const std::uint32_t* k = first; k != last; ++k) change<kSign>(*k);
+    // A separate loop: without the scattered stores the comparisons vectorise.
     const std::uint32_t lo_bucket = lo_.bucket, hi_bucket = hi_.bucket;
     int lo_below = 0, hi_below = 0;
     for (const std::uint32_t* k = first; k != last; ++k) {
-      const std::uint32_t key = *k;
-      change<kSign>(key);
-      lo_below += key < lo_bucket;
-      hi_below += key < hi_bucket;
+      lo_below += static_cast<int>(*k < lo_bucket);
+      hi_below += static_cast<int>(*k < hi_bucket);
     }
     const int n = static_cast<int>(last - first);
     size_ += kSign * n;
@@ -53,16 +52,22 @@ class OrderStatWindow {
     settle(lo_);
     return {lo_.bucket, lo_.below};
   }
-  /// Bucket holding the lower tracked rank. Pointers settle lazily, only when read: the window
-  /// jitters back and forth, so most of the movement cancels out before anyone looks.
-  [[nodiscard]] std::uint32_t lo_bucket() {
-    settle(lo_);
+  /// A bucket whose smallest value is a lower bound of the lower tracked rank's value: the
+  /// pointer moves down only when the window's changes made it invalid, never up, so it is
+  /// usually where it was (no walk) but may lag below the rank; tighten() catches it up.
+  [[nodiscard]] std::uint32_t lo_bound_bucket() {
+    while (lo_.below > lo_.rank) step_down(lo_);
     return lo_.bucket;
   }
-  /// Bucket holding the upper tracked rank.
-  [[nodiscard]] std::uint32_t hi_bucket() {
-    settle(hi_);
+  /// A bucket whose values bound the upper tracked rank's value from above, lazily as above.
+  [[nodiscard]] std::uint32_t hi_bound_bucket() {
+    while (hi_.below + count_[hi_.bucket] <= hi_.rank) step_up(hi_);
     return hi_.bucket;
+  }
+  /// Moves both pointers to the buckets that hold their ranks exactly (the tightest bounds).
+  void tighten() {
+    settle(lo_);
+    settle(hi_);
   }
   [[nodiscard]] int size() const { return size_; }
 
@@ -82,16 +87,18 @@ class OrderStatWindow {
     if constexpr (kSign > 0) occupied_[key >> 6] |= std::uint64_t{1} << (key & 63);
   }
 
+  void step_down(Pointer& p) {
+    p.bucket = previous_nonempty(p.bucket);
+    p.below -= count_[p.bucket];
+  }
+  void step_up(Pointer& p) {
+    p.below += count_[p.bucket];
+    p.bucket = next_nonempty(p.bucket);
+  }
   // Inlined: in the common case neither loop runs.
   [[gnu::always_inline]] void settle(Pointer& p) {
-    while (p.below > p.rank) {
-      p.bucket = previous_nonempty(p.bucket);
-      p.below -= count_[p.bucket];
-    }
-    while (p.below + count_[p.bucket] <= p.rank) {
-      p.below += count_[p.bucket];
-      p.bucket = next_nonempty(p.bucket);
-    }
+    while (p.below > p.rank) step_down(p);
+    while (p.below + count_[p.bucket] <= p.rank) step_up(p);
   }
   // Callers guarantee that a non-empty bucket exists in the searched direction.
   [[gnu::noinline]] std::uint32_t next_nonempty(std::uint32_t b) {

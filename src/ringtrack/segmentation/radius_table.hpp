@@ -22,6 +22,17 @@ class RadiusTable {
     while (r > r_min && v > threshold_[static_cast<std::size_t>(r)]) --r;
     return r;
   }
+  /// radius(v) <= k exactly when v > this bound (values are positive, so k >= the largest
+  /// radius gives a bound below every value).
+  [[nodiscard]] float radius_at_most_above(int k) const {
+    const auto next = static_cast<std::size_t>(k) + 1;
+    return next < threshold_.size() ? threshold_[next] : -1.0f;
+  }
+  /// radius(v) >= k exactly when v <= this bound (k >= 0).
+  [[nodiscard]] float radius_at_least_up_to(int k) const {
+    return static_cast<std::size_t>(k) < threshold_.size() ? threshold_[static_cast<std::size_t>(k)]
+                                                           : -1.0f;
+  }
 
  private:
   std::vector<std::uint16_t> radius_at_lower_;  // formula at the bucket's smallest value

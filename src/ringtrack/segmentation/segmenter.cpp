@@ -21,9 +21,8 @@ struct Segmenter::Tables {
   int columns{0};
   int pad{0};  // radius cap: the ring is extended by this many cells on both sides
   RadiusTable noise_radius, background_radius;
-  std::vector<float> value;                          // extended ring: filter ranges
-  std::vector<std::uint32_t> key;                    // extended ring: their buckets
-  std::vector<std::uint16_t> r_noise, r_background;  // per point of the ring
+  std::vector<float> value;        // extended ring: filter ranges
+  std::vector<std::uint32_t> key;  // extended ring: their buckets
   std::vector<float> scratch;
   OrderStatWindow noise_window{RangeBuckets::kCount};
   OrderStatWindow background_window{RangeBuckets::kCount};
@@ -54,13 +53,22 @@ int allowed_drift(int rho) {
 struct FilterState {
   OrderStatWindow* window;
   const std::uint32_t* key;
+  const RadiusTable* radius;
   int rho{-1};
   int drift{0};  // D = allowed_drift(rho)
   int centre{0};
   int left{0};
-  int right{-1};       // empty when right < left
-  float lo{0}, hi{0};  // bracket of the medians, valid when bracket_ready
-  bool bracket_ready{false};
+  int right{-1};  // empty when right < left
+  // The points the reference serves: extended index <= serve_end and value in (v_min, v_max],
+  // which is |r - rho| <= D without computing r (the radius is monotone in the value).
+  int serve_end{-1};
+  float v_min{0}, v_max{-1};
+  float lo{0}, hi{0};  // cached bounds, valid when lo_ready / hi_ready
+  bool lo_ready{false}, hi_ready{false};
+
+  [[nodiscard]] bool serves(int j, float v) const {
+    return j <= serve_end && v > v_min && v <= v_max;
+  }
 
   // Changes the window to [new_left, new_right]; returns the number of keys added or removed.
   std::size_t reshape(int new_left, int new_right) {
@@ -89,32 +97,46 @@ struct FilterState {
     return updates;
   }
 
-  // Makes the reference serve point j (extended index) with radius r; `last` is the extended
+  // Makes the reference serve point j (extended index) with value v; `last` is the extended
   // index of the ring's last cell. Returns the number of key updates.
-  std::size_t cover(int j, int r, int last) {
-    if (rho >= 0 && std::abs(r - rho) <= drift && std::abs(j - centre) <= drift) return 0;
+  std::size_t cover(int j, float v, int last) {
+    const int r = radius->radius(v, key[j]);
     if (rho < 0 || std::abs(r - rho) > drift) {
       rho = r;
       drift = allowed_drift(rho);
       window->set_ranks(rho - drift, rho + drift);
+      v_min = radius->radius_at_most_above(rho + drift);
+      v_max = radius->radius_at_least_up_to(rho - drift);
     }
     centre = std::min(j + drift, last);  // ahead of j, so it also serves the next 2 D points
-    bracket_ready = false;
+    serve_end = centre + drift;
+    lo_ready = hi_ready = false;
     return reshape(centre - rho, centre + rho);
   }
 
-  void read_bracket() {
-    lo = RangeBuckets::lower(window->lo_bucket());
-    hi = RangeBuckets::upper(window->hi_bucket());
-    bracket_ready = true;
-  }
+  // Bounds of the medians of the points served: valid always, tight after tighten(). Read once
+  // per reference position (the window does not change in between).
   float lower() {
-    if (!bracket_ready) read_bracket();
+    if (!lo_ready) {
+      lo = RangeBuckets::lower(window->lo_bound_bucket());
+      lo_ready = true;
+    }
     return lo;
   }
   float upper() {
-    if (!bracket_ready) read_bracket();
+    if (!hi_ready) {
+      hi = RangeBuckets::upper(window->hi_bound_bucket());
+      hi_ready = true;
+    }
     return hi;
+  }
+  // Makes the bounds tight; returns false if they already were (nothing to gain from a retry).
+  bool tighten() {
+    const std::uint32_t lo_before = window->lo_bound_bucket(),
+                        hi_before = window->hi_bound_bucket();
+    window->tighten();
+    lo_ready = hi_ready = false;
+    return window->lo_bound_bucket() != lo_before || window->hi_bound_bucket() != hi_before;
   }
 
   // For an exact window: becomes point j's own window (radius r), cheap when the previous query
@@ -127,7 +149,7 @@ struct FilterState {
   void clear() {
     reshape(0, -1);
     rho = -1;
-    bracket_ready = false;
+    serve_end = -1;
   }
 };
 
@@ -158,6 +180,17 @@ int decide(float noise_lo, float noise_hi, float background_lo, float background
   return -1;
 }
 
+// The decision from the reference windows' bounds. The background test needs only two of the four
+// bounds, so it goes first: it settles the common case, points on surfaces wider than objects.
+[[gnu::always_inline]] inline int decide_from_references(FilterState& noise,
+                                                         FilterState& background,
+                                                         const core::SegmentationConfig& c) {
+  const float noise_lo = noise.lower();
+  const float background_hi = background.upper();
+  if (background_hi - noise_lo < c.delta_min_m) return 0;
+  return decide(noise_lo, noise.upper(), background.lower(), background_hi, c);
+}
+
 }  // namespace
 
 Segmenter::Segmenter(const core::SegmentationConfig& config) : config_(config) {
@@ -181,8 +214,6 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     t->background_radius = RadiusTable(KernelRadius{config_.max_width_m, step, true, t->pad});
     t->value.resize(static_cast<std::size_t>(n + 2 * t->pad));
     t->key.resize(t->value.size());
-    t->r_noise.resize(static_cast<std::size_t>(n));
-    t->r_background.resize(static_cast<std::size_t>(n));
     tables_ = std::move(t);
   }
   Tables& t = *tables_;
@@ -206,45 +237,36 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     std::copy_n(t.key.begin() + n, pad, t.key.begin());
     std::copy_n(t.value.begin() + pad, pad, t.value.begin() + n + pad);
     std::copy_n(t.key.begin() + pad, pad, t.key.begin() + n + pad);
-    for (int col = 0; col < n; ++col) {
-      const auto j = static_cast<std::size_t>(col + pad);
-      t.r_noise[static_cast<std::size_t>(col)] =
-          static_cast<std::uint16_t>(t.noise_radius.radius(t.value[j], t.key[j]));
-      t.r_background[static_cast<std::size_t>(col)] =
-          static_cast<std::uint16_t>(t.background_radius.radius(t.value[j], t.key[j]));
-    }
-    FilterState noise{&t.noise_window, t.key.data()};
-    FilterState background{&t.background_window, t.key.data()};
-    FilterState noise_exact{&t.noise_exact_window, t.key.data()};
-    FilterState background_exact{&t.background_exact_window, t.key.data()};
+    FilterState noise{&t.noise_window, t.key.data(), &t.noise_radius};
+    FilterState background{&t.background_window, t.key.data(), &t.background_radius};
+    FilterState noise_exact{&t.noise_exact_window, t.key.data(), &t.noise_radius};
+    FilterState background_exact{&t.background_exact_window, t.key.data(), &t.background_radius};
     const int last = pad + n - 1;
     for (int col = 0; col < n; ++col) {
       const int c = col + pad;
       const auto i = base + static_cast<std::size_t>(col);
-      if (status[i] != core::ReturnStatus::kValid ||
-          !(t.value[static_cast<std::size_t>(c)] < invalid)) {
-        continue;  // invalid returns are background
-      }
-      const int rn = t.r_noise[static_cast<std::size_t>(col)];
-      const int rb = t.r_background[static_cast<std::size_t>(col)];
-      stats_.window_updates += noise.cover(c, rn, last);
-      stats_.window_updates += background.cover(c, rb, last);
+      const float v = t.value[static_cast<std::size_t>(c)];
+      if (!(v < invalid)) continue;  // invalid returns are background
+      if (!noise.serves(c, v)) stats_.window_updates += noise.cover(c, v, last);
+      if (!background.serves(c, v)) stats_.window_updates += background.cover(c, v, last);
       ++stats_.points;
-      // 1) Brackets from the reference windows: settle nearly every point. The background test
-      // needs only two of the four bounds, so it goes first.
-      const float noise_lo = noise.lower();
-      const float background_hi = background.upper();
-      if (background_hi - noise_lo < config_.delta_min_m) continue;
-      int label = decide(noise_lo, noise.upper(), background.lower(), background_hi, config_);
+      // 1) Bounds from the reference windows settle nearly every point; when the cheap, lazy
+      // bounds do not, the tight ones are tried.
+      int label = decide_from_references(noise, background, config_);
+      if (label < 0 && (noise.tighten() | background.tighten()))
+        label = decide_from_references(noise, background, config_);
       if (label < 0) {
         // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window
         // is the narrow, cheap one, then if still needed the background median.
         ++stats_.bucket_decisions;
+        const std::uint32_t k = t.key[static_cast<std::size_t>(c)];
+        const int rn = t.noise_radius.radius(v, k);
+        const int rb = t.background_radius.radius(v, k);
         const auto nb = noise_exact.median_bucket(c, rn);
         const float noise_median_lo = RangeBuckets::lower(nb.first);
         const float noise_median_hi = RangeBuckets::upper(nb.first);
-        label =
-            decide(noise_median_lo, noise_median_hi, background.lower(), background_hi, config_);
+        label = decide(noise_median_lo, noise_median_hi, background.lower(), background.upper(),
+                       config_);
         if (label < 0) {
           const auto bb = background_exact.median_bucket(c, rb);
           label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(bb.first),
