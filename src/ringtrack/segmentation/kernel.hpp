@@ -36,6 +36,22 @@ inline bool is_segment(float noise_median_m, float background_median_m,
   return certainty(background_median_m - noise_median_m, config) >= config.certainty_threshold;
 }
 
+/// The segment rule as intervals of the (float) median difference, so that bounds of the two
+/// medians can settle a decision without the medians themselves: a difference below
+/// background_below or above background_above is background, one in [segment_from, segment_to]
+/// is a segment. Exact (the two intervals meet) whenever the certainty reaches the threshold at
+/// some float; the fast segmenter relies on it only through these comparisons.
+struct DeltaRule {
+  float background_below{0};
+  float segment_from{0};
+  float segment_to{0};
+  float background_above{0};
+};
+
+/// The rule for a configuration: the smallest and largest floats whose certainty reaches the
+/// threshold, found by bisection over floats (certainty rises then falls, monotonically).
+DeltaRule delta_rule(const core::SegmentationConfig& config);
+
 /// Label values in a segmentation result.
 enum SegmentLabel : std::uint8_t { kBackground = 0, kSegment = 1 };
 

@@ -54,7 +54,7 @@ class OrderStatWindow {
   }
   /// A bucket whose smallest value is a lower bound of the lower tracked rank's value: the
   /// pointer moves down only when the window's changes made it invalid, never up, so it is
-  /// usually where it was (no walk) but may lag below the rank; tighten() catches it up.
+  /// usually where it was (no walk) but may lag below the rank.
   [[nodiscard]] std::uint32_t lo_bound_bucket() {
     while (lo_.below > lo_.rank) step_down(lo_);
     return lo_.bucket;
@@ -64,10 +64,17 @@ class OrderStatWindow {
     while (hi_.below + count_[hi_.bucket] <= hi_.rank) step_up(hi_);
     return hi_.bucket;
   }
-  /// Moves both pointers to the buckets that hold their ranks exactly (the tightest bounds).
-  void tighten() {
+  /// The buckets holding ranks lo <= hi exactly (0 <= lo, hi < size()), for one query. The
+  /// pointers stay there afterwards but keep their tracked ranks, so later bound reads stay valid.
+  [[nodiscard]] std::pair<std::uint32_t, std::uint32_t> buckets_at(int lo, int hi) {
+    const int lo_rank = lo_.rank, hi_rank = hi_.rank;
+    lo_.rank = lo;
+    hi_.rank = hi;
     settle(lo_);
     settle(hi_);
+    lo_.rank = lo_rank;
+    hi_.rank = hi_rank;
+    return {lo_.bucket, hi_.bucket};
   }
   [[nodiscard]] int size() const { return size_; }
 

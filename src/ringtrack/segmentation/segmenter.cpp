@@ -1,8 +1,11 @@
 #include "ringtrack/segmentation/segmenter.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <tuple>
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/segmentation/kernel.hpp"
@@ -16,11 +19,39 @@ using detail::OrderStatWindow;
 using detail::RadiusTable;
 using detail::RangeBuckets;
 
+namespace {
+// Radius up to which a median is computed directly from the values (at most 5 of them).
+constexpr int kDirectRadius = 2;
+
+// The median of the 2 r + 1 values around *centre, r <= kDirectRadius, by comparisons only.
+float direct_median(const float* centre, int r) {
+  const auto median3 = [](float a, float b, float c) {
+    return std::max(std::min(a, b), std::min(std::max(a, b), c));
+  };
+  if (r == 0) return centre[0];
+  if (r == 1) return median3(centre[-1], centre[0], centre[1]);
+  // Of five values: order the outer pairs, a <= b and c <= d, so that a <= c. Then a is at most
+  // three others and never above the median: the median is the second smallest of b, c, d and
+  // the centre, i.e. of the ordered pairs (b, e) and (c, d).
+  float a = centre[-2], b = centre[-1], c = centre[1], d = centre[2], e = centre[0];
+  if (a > b) std::swap(a, b);
+  if (c > d) std::swap(c, d);
+  if (a > c) {  // swap the pairs; the new a is not needed further
+    c = a;
+    std::swap(b, d);
+  }
+  if (b > e) std::swap(b, e);
+  return std::min(std::max(b, c), std::min(e, d));
+}
+
+}  // namespace
+
 // Per-column-count state: radius tables and scratch buffers reused across scans.
 struct Segmenter::Tables {
   int columns{0};
   int pad{0};  // radius cap: the ring is extended by this many cells on both sides
   RadiusTable noise_radius, background_radius;
+  float direct_noise_above{0};     // values above it have a noise radius <= kDirectRadius
   std::vector<float> value;        // extended ring: filter ranges
   std::vector<std::uint32_t> key;  // extended ring: their buckets
   std::vector<float> scratch;
@@ -130,13 +161,15 @@ struct FilterState {
     }
     return hi;
   }
-  // Makes the bounds tight; returns false if they already were (nothing to gain from a retry).
-  bool tighten() {
-    const std::uint32_t lo_before = window->lo_bound_bucket(),
-                        hi_before = window->hi_bound_bucket();
-    window->tighten();
-    lo_ready = hi_ready = false;
-    return window->lo_bound_bucket() != lo_before || window->hi_bound_bucket() != hi_before;
+  // Tight bounds of the median of point j's own window [j - r, j + r] (a point the reference
+  // serves). Of its 2 r + 1 values, `outside` lie outside the reference window and `missing`
+  // reference values lie outside it, so its median (rank r) is at least the reference's rank
+  // r - outside and at most its rank r + missing.
+  std::pair<float, float> bounds_for(int j, int r) {
+    const int outside = std::max(0, left - (j - r)) + std::max(0, (j + r) - right);
+    const int missing = std::max(0, (j - r) - left) + std::max(0, right - (j + r));
+    const auto buckets = window->buckets_at(r - outside, r + missing);
+    return {RangeBuckets::lower(buckets.first), RangeBuckets::upper(buckets.second)};
   }
 
   // For an exact window: becomes point j's own window (radius r), cheap when the previous query
@@ -168,27 +201,66 @@ float median_in_bucket(const std::vector<float>& value, const std::vector<std::u
   return *nth;
 }
 
-// The decision from brackets of both medians: 1 segment, 0 background, -1 undecided. Float
-// subtraction is monotone, so the differences bracket the true delta; certainty is 1 on
-// [delta_low, delta_high] and 0 outside [delta_min, delta_max], and the threshold lies in (0, 1].
+// The decision from bounds of both medians: 1 segment, 0 background, -1 undecided. Float
+// subtraction is monotone, so the differences of the bounds bound the true difference.
 int decide(float noise_lo, float noise_hi, float background_lo, float background_hi,
-           const core::SegmentationConfig& c) {
+           const DeltaRule& rule) {
   const float delta_hi = background_hi - noise_lo;
   const float delta_lo = background_lo - noise_hi;
-  if (delta_hi < c.delta_min_m || delta_lo > c.delta_max_m) return 0;
-  if (delta_lo >= c.delta_low_m && delta_hi <= c.delta_high_m) return 1;
+  if (delta_hi < rule.background_below || delta_lo > rule.background_above) return 0;
+  if (delta_lo >= rule.segment_from && delta_hi <= rule.segment_to) return 1;
   return -1;
 }
 
-// The decision from the reference windows' bounds. The background test needs only two of the four
-// bounds, so it goes first: it settles the common case, points on surfaces wider than objects.
-[[gnu::always_inline]] inline int decide_from_references(FilterState& noise,
-                                                         FilterState& background,
-                                                         const core::SegmentationConfig& c) {
-  const float noise_lo = noise.lower();
-  const float background_hi = background.upper();
-  if (background_hi - noise_lo < c.delta_min_m) return 0;
-  return decide(noise_lo, noise.upper(), background.lower(), background_hi, c);
+// The four median windows of one ring: two references that jump along with the points, and two
+// exact windows that follow the points the references leave open.
+struct RingFilters {
+  FilterState noise, background, noise_exact, background_exact;
+  void clear() {
+    for (auto* f : {&noise, &background, &noise_exact, &background_exact}) f->clear();
+  }
+};
+
+// The label of point c (value at extended index c) that the references' cheap bounds left open.
+int decide_open_point(RingFilters& f, const std::vector<float>& value,
+                      const std::vector<std::uint32_t>& key, int c,
+                      std::optional<float> noise_median, std::vector<float>& scratch,
+                      const core::SegmentationConfig& config, const DeltaRule& rule,
+                      SegmenterStats& stats) {
+  ++stats.tight_decisions;
+  const auto i = static_cast<std::size_t>(c);
+  const int rn = f.noise.radius->radius(value[i], key[i]);
+  const int rb = f.background.radius->radius(value[i], key[i]);
+  // 1) Tight bounds from the same reference windows, for this point's own ranks.
+  float noise_lo = 0, noise_hi = 0;
+  if (noise_median) {
+    noise_lo = noise_hi = *noise_median;
+  } else {
+    std::tie(noise_lo, noise_hi) = f.noise.bounds_for(c, rn);
+  }
+  const auto [background_lo, background_hi] = f.background.bounds_for(c, rb);
+  int label = decide(noise_lo, noise_hi, background_lo, background_hi, rule);
+  if (label >= 0) return label;
+  // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window is the
+  // narrow, cheap one, then if still needed the background median.
+  ++stats.bucket_decisions;
+  std::pair<std::uint32_t, int> nb{};
+  if (!noise_median) {
+    nb = f.noise_exact.median_bucket(c, rn);
+    noise_lo = RangeBuckets::lower(nb.first);
+    noise_hi = RangeBuckets::upper(nb.first);
+    label = decide(noise_lo, noise_hi, background_lo, background_hi, rule);
+    if (label >= 0) return label;
+  }
+  const auto bb = f.background_exact.median_bucket(c, rb);
+  label = decide(noise_lo, noise_hi, RangeBuckets::lower(bb.first), RangeBuckets::upper(bb.first),
+                 rule);
+  if (label >= 0) return label;
+  // 3) The exact medians, with the same arithmetic as the definition.
+  ++stats.exact_decisions;
+  if (!noise_median) noise_median = median_in_bucket(value, key, c, rn, nb, scratch);
+  const float background_median = median_in_bucket(value, key, c, rb, bb, scratch);
+  return is_segment(*noise_median, background_median, config) ? 1 : 0;
 }
 
 }  // namespace
@@ -197,6 +269,7 @@ Segmenter::Segmenter(const core::SegmentationConfig& config) : config_(config) {
   core::Config full;
   full.segmentation = config;
   core::validate_config(full);
+  rule_ = delta_rule(config_);
 }
 Segmenter::~Segmenter() = default;
 Segmenter::Segmenter(Segmenter&&) noexcept = default;
@@ -212,6 +285,7 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     const double step = 2.0 * std::numbers::pi / n;
     t->noise_radius = RadiusTable(KernelRadius{config_.min_width_m, step, false, t->pad});
     t->background_radius = RadiusTable(KernelRadius{config_.max_width_m, step, true, t->pad});
+    t->direct_noise_above = t->noise_radius.radius_at_most_above(kDirectRadius);
     t->value.resize(static_cast<std::size_t>(n + 2 * t->pad));
     t->key.resize(t->value.size());
     tables_ = std::move(t);
@@ -237,52 +311,42 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     std::copy_n(t.key.begin() + n, pad, t.key.begin());
     std::copy_n(t.value.begin() + pad, pad, t.value.begin() + n + pad);
     std::copy_n(t.key.begin() + pad, pad, t.key.begin() + n + pad);
-    FilterState noise{&t.noise_window, t.key.data(), &t.noise_radius};
-    FilterState background{&t.background_window, t.key.data(), &t.background_radius};
-    FilterState noise_exact{&t.noise_exact_window, t.key.data(), &t.noise_radius};
-    FilterState background_exact{&t.background_exact_window, t.key.data(), &t.background_radius};
+    RingFilters f{{&t.noise_window, t.key.data(), &t.noise_radius},
+                  {&t.background_window, t.key.data(), &t.background_radius},
+                  {&t.noise_exact_window, t.key.data(), &t.noise_radius},
+                  {&t.background_exact_window, t.key.data(), &t.background_radius}};
     const int last = pad + n - 1;
     for (int col = 0; col < n; ++col) {
       const int c = col + pad;
       const auto i = base + static_cast<std::size_t>(col);
       const float v = t.value[static_cast<std::size_t>(c)];
       if (!(v < invalid)) continue;  // invalid returns are background
-      if (!noise.serves(c, v)) stats_.window_updates += noise.cover(c, v, last);
-      if (!background.serves(c, v)) stats_.window_updates += background.cover(c, v, last);
       ++stats_.points;
-      // 1) Bounds from the reference windows settle nearly every point; when the cheap, lazy
-      // bounds do not, the tight ones are tried.
-      int label = decide_from_references(noise, background, config_);
-      if (label < 0 && (noise.tighten() | background.tighten()))
-        label = decide_from_references(noise, background, config_);
+      // A noise window of a few values (far points) gives its median directly; otherwise the
+      // noise reference bounds it.
+      std::optional<float> noise_median;
+      if (v > t.direct_noise_above) {
+        noise_median = direct_median(&t.value[static_cast<std::size_t>(c)],
+                                     t.noise_radius.radius(v, t.key[static_cast<std::size_t>(c)]));
+      } else if (!f.noise.serves(c, v)) {
+        stats_.window_updates += f.noise.cover(c, v, last);
+      }
+      if (!f.background.serves(c, v)) stats_.window_updates += f.background.cover(c, v, last);
+      // Bounds from the reference windows settle nearly every point. The background test needs
+      // only two of the four bounds, so it goes first: it settles the common case, points on
+      // surfaces wider than objects.
+      const float noise_lo = noise_median ? *noise_median : f.noise.lower();
+      const float background_hi = f.background.upper();
+      if (background_hi - noise_lo < rule_.background_below) continue;
+      const float noise_hi = noise_median ? *noise_median : f.noise.upper();
+      int label = decide(noise_lo, noise_hi, f.background.lower(), background_hi, rule_);
       if (label < 0) {
-        // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window
-        // is the narrow, cheap one, then if still needed the background median.
-        ++stats_.bucket_decisions;
-        const std::uint32_t k = t.key[static_cast<std::size_t>(c)];
-        const int rn = t.noise_radius.radius(v, k);
-        const int rb = t.background_radius.radius(v, k);
-        const auto nb = noise_exact.median_bucket(c, rn);
-        const float noise_median_lo = RangeBuckets::lower(nb.first);
-        const float noise_median_hi = RangeBuckets::upper(nb.first);
-        label = decide(noise_median_lo, noise_median_hi, background.lower(), background.upper(),
-                       config_);
-        if (label < 0) {
-          const auto bb = background_exact.median_bucket(c, rb);
-          label = decide(noise_median_lo, noise_median_hi, RangeBuckets::lower(bb.first),
-                         RangeBuckets::upper(bb.first), config_);
-          if (label < 0) {
-            // 3) The exact medians, with the same arithmetic as the definition.
-            ++stats_.exact_decisions;
-            const float noise_median = median_in_bucket(t.value, t.key, c, rn, nb, t.scratch);
-            const float background_median = median_in_bucket(t.value, t.key, c, rb, bb, t.scratch);
-            label = is_segment(noise_median, background_median, config_) ? 1 : 0;
-          }
-        }
+        label = decide_open_point(f, t.value, t.key, c, noise_median, t.scratch, config_, rule_,
+                                  stats_);
       }
       if (label == 1) labels[i] = kSegment;
     }
-    for (auto* f : {&noise, &background, &noise_exact, &background_exact}) f->clear();
+    f.clear();
   }
 }
 

@@ -7,13 +7,15 @@
 
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/segmentation/kernel.hpp"
 
 namespace ringtrack::segmentation {
 
 /// Counters of the last segment() call, for benchmarks and diagnostics.
 struct SegmenterStats {
   std::size_t points{0};            ///< valid points labelled
-  std::size_t bucket_decisions{0};  ///< points the reference brackets left open
+  std::size_t tight_decisions{0};   ///< points the references' lazy bounds left open
+  std::size_t bucket_decisions{0};  ///< of those, points the tight bounds left open
   std::size_t exact_decisions{0};   ///< of those, points whose exact median values were needed
   std::size_t window_updates{0};    ///< keys added to or removed from the median windows
 };
@@ -42,6 +44,7 @@ class Segmenter {
  private:
   struct Tables;
   core::SegmentationConfig config_;
+  DeltaRule rule_;                  // the certainty rule as intervals of the median difference
   std::unique_ptr<Tables> tables_;  // rebuilt when the column count changes
   SegmenterStats stats_;
 };
