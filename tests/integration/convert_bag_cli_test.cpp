@@ -32,22 +32,6 @@ fs::path data_dir() {
   return fs::path(RINGTRACK_SOURCE_DIR) / ".." / "shared" / "data" / "vlp16_indoor_nebula";
 }
 
-// VelodyneScan messages of 75 packets each.
-std::vector<test::TestBagMessage> scan_messages(
-    const std::vector<test::EncodedVelodynePacket>& ps) {
-  std::vector<test::TestBagMessage> out;
-  for (std::size_t i = 0; i < ps.size(); i += 75) {
-    test::TestVelodyneScan s;
-    s.stamp_ns = ps[i].host_stamp_ns;
-    for (std::size_t k = i; k < std::min(ps.size(), i + 75); ++k) {
-      s.packets.push_back({ps[k].host_stamp_ns, ps[k].payload});
-    }
-    out.push_back(
-        {0, s.packets.back().stamp_ns, test::serialize_velodyne_scan(s, test::RosEncoding::kRos1)});
-  }
-  return out;
-}
-
 void expect_sequence_is(const std::string& folder, const std::vector<core::OrganizedScan>& scans) {
   io::SequenceReader reader(folder);
   ASSERT_EQ(reader.size(), scans.size());
@@ -77,7 +61,8 @@ TEST(ConvertBagCli, Ros1BagOfPacketsGivesTheirScans) {
   });
   const std::string bag = dir + "/drive.bag";
   test::write_rosbag1(bag, {{"/velodyne_packets", "velodyne_msgs/VelodyneScan"}},
-                      scan_messages(packets), {"lz4", 100'000, true});
+                      test::velodyne_scan_messages(packets, 0, test::RosEncoding::kRos1),
+                      {"lz4", 100'000, true});
   const auto r = run_command(kCli + " convert " + bag + " --out " + dir + "/seq");
   ASSERT_EQ(r.exit_code, 0) << r.err;
 

@@ -4,6 +4,7 @@
 #include <lz4frame.h>
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -208,6 +209,23 @@ std::vector<std::uint8_t> serialize_string(const std::string& text, RosEncoding 
   Serializer s(encoding);
   s.string(text);
   return s.take();
+}
+
+std::vector<TestBagMessage> velodyne_scan_messages(
+    const std::vector<EncodedVelodynePacket>& packets, std::size_t topic, RosEncoding encoding,
+    std::size_t packets_per_message) {
+  if (packets_per_message == 0) throw std::invalid_argument("packets_per_message must be > 0");
+  std::vector<TestBagMessage> out;
+  for (std::size_t i = 0; i < packets.size(); i += packets_per_message) {
+    TestVelodyneScan s;
+    s.seq = static_cast<std::uint32_t>(out.size());
+    s.stamp_ns = packets[i].host_stamp_ns;
+    for (std::size_t k = i; k < std::min(packets.size(), i + packets_per_message); ++k) {
+      s.packets.push_back({packets[k].host_stamp_ns, packets[k].payload});
+    }
+    out.push_back({topic, s.packets.back().stamp_ns, serialize_velodyne_scan(s, encoding)});
+  }
+  return out;
 }
 
 void write_rosbag1(const std::filesystem::path& path, const std::vector<TestBagTopic>& topics,

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "support/velodyne_encoder.hpp"
+
 namespace ringtrack::test {
 
 /// Message serialization.
@@ -84,6 +86,14 @@ struct TestBagMessage {
   std::int64_t stamp_ns{0};
   std::vector<std::uint8_t> data;
 };
+
+/// Packs encoded packets into VelodyneScan messages of `packets_per_message` consecutive packets
+/// (75: about one VLP-16 revolution, like the ROS driver's) on topic index `topic`; each message's
+/// header stamp is its first packet's receive time, its record stamp its last one's, its ROS 1
+/// seq its position.
+std::vector<TestBagMessage> velodyne_scan_messages(
+    const std::vector<EncodedVelodynePacket>& packets, std::size_t topic, RosEncoding encoding,
+    std::size_t packets_per_message = 75);
 
 /// How write_rosbag1 lays out the bag.
 struct Rosbag1WriteOptions {

@@ -24,17 +24,19 @@ std::string list_topics(const std::vector<RosbagTopicInfo>& topics) {
 std::vector<VelodyneScanPacket> parse_velodyne_scan(std::span<const std::uint8_t> message,
                                                     RosSerialization serialization,
                                                     const std::string& where) {
-  if (serialization == RosSerialization::kCdr) return parse_velodyne_scan_cdr(message, where);
   RosMessageCursor in(message, serialization, where + ": VelodyneScan");
   in.header_stamp_ns();
-  // A ROS 1 packet: time stamp (8 bytes) and a fixed-size uint8[1206] (no length prefix).
+  // A packet: time stamp (8 bytes) and a fixed-size uint8[1206] (no length prefix); CDR aligns
+  // each stamp to 4 bytes.
   const std::uint32_t count = in.sequence_length(8 + kVelodyneDataPacketBytes, "packets");
   std::vector<VelodyneScanPacket> packets(count);
   for (auto& p : packets) {
     p.stamp_ns = in.time_ns();
     p.data = in.bytes(kVelodyneDataPacketBytes);
   }
-  if (in.remaining() != 0) {
+  // DDS pads a CDR payload to a multiple of 4 bytes (the real bag's messages end with 2 such
+  // bytes), so only ROS 1 messages must end exactly after the last packet.
+  if (serialization == RosSerialization::kRos1 && in.remaining() != 0) {
     in.fail(std::to_string(in.remaining()) + " bytes after the last packet (expected none)");
   }
   return packets;

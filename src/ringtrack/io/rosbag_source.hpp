@@ -14,7 +14,6 @@
 #include "ringtrack/io/pointcloud2.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
-#include "ringtrack/io/velodyne_rosbag2_source.hpp"
 #include "ringtrack/io/velodyne_source.hpp"
 
 namespace ringtrack::io {
@@ -24,8 +23,15 @@ inline constexpr const char* kVelodyneScanRosType = "velodyne_msgs/VelodyneScan"
 /// sensor_msgs/PointCloud2 (type name without "/msg/").
 inline constexpr const char* kPointCloud2RosType = "sensor_msgs/PointCloud2";
 
+/// One packet of a velodyne_msgs/VelodyneScan message.
+struct VelodyneScanPacket {
+  std::int64_t stamp_ns{0};            ///< the packet's header time
+  std::span<const std::uint8_t> data;  ///< its 1206 bytes (points into the message)
+};
+
 /// Parses a serialized velodyne_msgs/VelodyneScan (Header, then VelodynePacket[] of {time
-/// stamp, uint8[1206] data}) in either serialization; throws core::InputError naming `where`.
+/// stamp, uint8[1206] data}) in either serialization; throws core::InputError naming `where`,
+/// the byte offset and what was expected.
 std::vector<VelodyneScanPacket> parse_velodyne_scan(std::span<const std::uint8_t> message,
                                                     RosSerialization serialization,
                                                     const std::string& where);

@@ -4,7 +4,8 @@
 #include <filesystem>
 
 #include "ringtrack/core/error.hpp"
-#include "ringtrack/io/velodyne_rosbag2_source.hpp"
+#include "ringtrack/io/rosbag_reader.hpp"
+#include "ringtrack/io/scan_source.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -23,35 +24,6 @@ class PcapInput final : public VelodyneScanSource {
 
  private:
   VelodynePcapSource source_;
-};
-
-class BagInput final : public VelodyneScanSource {
- public:
-  BagInput(const std::string& input, const VelodyneSourceOptions& o)
-      : source_(input, o.topic, o.decoder) {}
-  std::optional<core::OrganizedScan> next() override { return source_.next(); }
-  [[nodiscard]] const core::SensorModel& model() const override {
-    return source_.decoder().model();
-  }
-  [[nodiscard]] std::string summary() const override {
-    const auto& s = source_.stats();
-    const auto& d = source_.decoder().stats();
-    std::string line = std::to_string(s.messages) + " messages of " + source_.topic().name + ", " +
-                       std::to_string(d.decoded_packets) + " data packets decoded, " +
-                       std::to_string(d.scans) + " scans";
-    const auto add = [&line](const char* what, std::uint64_t n) {
-      if (n > 0) line += ", " + std::to_string(n) + " " + what;
-    };
-    add("messages of other topics ignored", s.other_messages);
-    add("skipped data packets", d.skipped_packets());
-    add("lost firing sequences", d.lost_sequences);
-    add("invalid columns", d.invalid_columns);
-    add("partial scans dropped", d.partial_scans_dropped);
-    return line;
-  }
-
- private:
-  VelodyneRosbag2Source source_;
 };
 
 class UdpInput final : public VelodyneScanSource {
@@ -102,13 +74,7 @@ VelodyneInputFormat guess_velodyne_input_format(const std::string& input) {
   const fs::path path(input);
   const std::string ext = path.extension().string();
   if (ext == ".pcap" || ext == ".pcapng" || ext == ".cap") return VelodyneInputFormat::kPcap;
-  if (ext == ".db3") return VelodyneInputFormat::kRosbag2;
-  if (fs::is_directory(path)) {
-    if (fs::exists(path / "metadata.yaml")) return VelodyneInputFormat::kRosbag2;
-    for (const auto& entry : fs::directory_iterator(path)) {
-      if (entry.path().extension() == ".db3") return VelodyneInputFormat::kRosbag2;
-    }
-  }
+  if (is_rosbag2_path(path)) return VelodyneInputFormat::kRosbag2;
   throw core::InputError(input +
                          ": not a Velodyne input (expected udp://HOST:PORT, a .pcap/.pcapng "
                          "file or a ROS 2 bag); name the format explicitly");
@@ -122,8 +88,14 @@ std::unique_ptr<VelodyneScanSource> open_velodyne_source(const std::string& inpu
   switch (format) {
     case VelodyneInputFormat::kPcap:
       return std::make_unique<PcapInput>(input, options);
-    case VelodyneInputFormat::kRosbag2:
-      return std::make_unique<BagInput>(input, options);
+    case VelodyneInputFormat::kRosbag2: {
+      // Bags have one reader for every front end: the generic bag source (rosbag_source.hpp).
+      ScanSourceOptions bag;
+      bag.format = ScanInputFormat::kRosbag2;
+      bag.velodyne = options;
+      bag.topic = options.topic;
+      return open_scan_source(input, bag);
+    }
     case VelodyneInputFormat::kUdp:
       return std::make_unique<UdpInput>(input, options);
     case VelodyneInputFormat::kAuto:

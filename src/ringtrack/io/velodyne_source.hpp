@@ -1,6 +1,7 @@
 #pragma once
-/// One interface over the Velodyne inputs (pcap/pcapng files, ROS 2 bags, live UDP), chosen
-/// from the input's name, for front ends (`ringtrack run`, `ringtrack convert`).
+/// One interface over the Velodyne inputs (pcap/pcapng files, live UDP; ROS 2 bags through the
+/// bag source of rosbag_source.hpp), chosen from the input's name. Front ends (`ringtrack run`,
+/// `ringtrack convert`) open every input through open_scan_source (scan_source.hpp).
 
 #include <atomic>
 #include <memory>
@@ -19,7 +20,7 @@ namespace ringtrack::io {
 enum class VelodyneInputFormat {
   kAuto,     ///< from the name: udp://..., *.pcap / *.pcapng, a rosbag2 folder or *.db3
   kPcap,     ///< classic pcap or pcapng
-  kRosbag2,  ///< rosbag2 folder or .db3 file (velodyne_msgs/msg/VelodyneScan)
+  kRosbag2,  ///< rosbag2 folder or .db3 file (read by RosbagScanSource, like open_scan_source)
   kUdp,      ///< live: udp://HOST:PORT
 };
 
@@ -28,7 +29,7 @@ struct VelodyneSourceOptions {
   VelodyneInputFormat format{VelodyneInputFormat::kAuto};
   VelodyneDecoderOptions decoder;
   VelodynePcapOptions pcap;
-  std::string topic;  ///< rosbag2: topic (default: the only VelodyneScan topic)
+  std::string topic;  ///< rosbag2: topic (default: as RosbagSourceOptions::topic)
   std::size_t udp_max_queued_scans{2};
   /// Live input: when set and true, next() stops the source and returns the remaining scans
   /// (set it from a SIGINT handler).

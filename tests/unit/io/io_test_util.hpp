@@ -2,7 +2,6 @@
 // Shared helpers of the io unit tests: temporary folders and small hand-made scans.
 
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdint>
@@ -16,34 +15,12 @@
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/io/text.hpp"
+#include "support/temp_dir.hpp"
 
 namespace ringtrack::io::test {
 
-/// A fresh folder under the system temp dir, removed with its contents on destruction.
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = std::filesystem::temp_directory_path() /
-            ("ringtrack_io_" + std::to_string(::getpid()) + "_" + info->test_suite_name() + "_" +
-             info->name());
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  [[nodiscard]] const std::filesystem::path& path() const { return path_; }
-  [[nodiscard]] std::filesystem::path operator/(const std::string& name) const {
-    return path_ / name;
-  }
-
- private:
-  std::filesystem::path path_;
-};
+/// A fresh folder per test (tests/support/temp_dir.hpp).
+using TempDir = ::ringtrack::test::TempDir;
 
 inline std::string read_text(const std::filesystem::path& path) {
   const auto bytes = read_file_bytes(path);

@@ -2,7 +2,6 @@
 // for the reader; the test support writer makes Velodyne and point cloud bags for the scan
 // source; corrupt and truncated bags are errors, never crashes.
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -15,6 +14,7 @@
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "support/rosbag_writers.hpp"
+#include "support/temp_dir.hpp"
 #include "support/velodyne_encoder.hpp"
 
 namespace ringtrack::io {
@@ -24,25 +24,6 @@ namespace fs = std::filesystem;
 
 const fs::path kFixtures = fs::path(RINGTRACK_SOURCE_DIR) / "tests" / "unit" / "io" / "fixtures";
 constexpr std::int64_t kBaseNs = 1'700'000'000'000'000'000;
-
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("ringtrack_ros1_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 std::vector<std::uint8_t> read_file(const fs::path& p) {
   std::ifstream in(p, std::ios::binary);
@@ -155,7 +136,7 @@ TEST(Rosbag1, ReadsBagsWrittenByRosbag) {
 
 TEST(Rosbag1, TheSupportWriterMatchesRosbag) {
   // The writer the other tests use lays out bags like rosbag: same messages, same reads.
-  TempDir dir;
+  test::TempDir dir;
   const std::vector<test::TestBagTopic> topics{{"/chatter", "std_msgs/String"},
                                                {"/velodyne_packets", "velodyne_msgs/VelodyneScan"},
                                                {"/points", "sensor_msgs/PointCloud2"}};
@@ -202,22 +183,6 @@ std::vector<test::EncodedVelodynePacket> encode_packets(double revolutions) {
   });
 }
 
-// VelodyneScan messages of ~one revolution (75 packets) each.
-std::vector<test::TestBagMessage> scan_messages(const std::vector<test::EncodedVelodynePacket>& ps,
-                                                std::size_t topic, test::RosEncoding encoding) {
-  std::vector<test::TestBagMessage> out;
-  for (std::size_t i = 0; i < ps.size(); i += 75) {
-    test::TestVelodyneScan s;
-    s.seq = static_cast<std::uint32_t>(out.size());
-    s.stamp_ns = ps[i].host_stamp_ns;
-    for (std::size_t k = i; k < std::min(ps.size(), i + 75); ++k) {
-      s.packets.push_back({ps[k].host_stamp_ns, ps[k].payload});
-    }
-    out.push_back({topic, s.packets.back().stamp_ns, test::serialize_velodyne_scan(s, encoding)});
-  }
-  return out;
-}
-
 std::vector<core::OrganizedScan> decode_direct(const std::vector<test::EncodedVelodynePacket>& ps) {
   VelodyneDecoder decoder;
   for (const auto& p : ps) decoder.add_packet(p.payload, p.host_stamp_ns);
@@ -245,11 +210,11 @@ void expect_same_scans(ScanSource& source, const std::vector<core::OrganizedScan
 }
 
 TEST(Rosbag1, VelodyneScanBagsDecodeLikeThePackets) {
-  TempDir dir;
+  test::TempDir dir;
   const auto ps = encode_packets(3.4);
   const auto expected = decode_direct(ps);
   ASSERT_EQ(expected.size(), 2u);
-  auto messages = scan_messages(ps, 1, test::RosEncoding::kRos1);
+  auto messages = test::velodyne_scan_messages(ps, 1, test::RosEncoding::kRos1);
   // Another topic in between: ignored and counted.
   messages.insert(messages.begin() + 1, {0, messages.front().stamp_ns,
                                          test::serialize_string("x", test::RosEncoding::kRos1)});
@@ -281,7 +246,7 @@ TEST(Rosbag1, VelodyneScanBagsDecodeLikeThePackets) {
 }
 
 TEST(Rosbag1, PointCloudTopicsGiveOneScanPerCloud) {
-  TempDir dir;
+  test::TempDir dir;
   const auto model = core::SensorModel::vlp16();
   std::vector<test::TestBagMessage> messages;
   for (int m = 0; m < 3; ++m) {
@@ -326,7 +291,7 @@ TEST(Rosbag1, PointCloudTopicsGiveOneScanPerCloud) {
 }
 
 TEST(Rosbag1, TopicChoiceAndUnsupportedTypes) {
-  TempDir dir;
+  test::TempDir dir;
   const fs::path path = dir.path() / "t.bag";
   test::write_rosbag1(path, {{"/imu", "sensor_msgs/Imu"}, {"/chatter", "std_msgs/String"}},
                       {{0, kBaseNs, {1, 2, 3}},
@@ -379,7 +344,7 @@ bool read_all(const fs::path& path, const std::string& topic,
 }
 
 TEST(Rosbag1, TruncatedBagsAreErrors) {
-  TempDir dir;
+  test::TempDir dir;
   std::vector<std::vector<std::uint8_t>> expected;
   for (int i = 0; i < 4; ++i) expected.push_back(fixture_scan(i));
   for (const std::string compression : {"none", "lz4", "bz2"}) {
@@ -412,9 +377,9 @@ TEST(Rosbag1, TruncatedBagsAreErrors) {
 TEST(Rosbag1, InterruptedRecordingsKeepTheirCompleteMessages) {
   // No index (the recorder died): the bag is scanned; a last chunk cut off by the end of the
   // file ends the data, and everything before it is read.
-  TempDir dir;
+  test::TempDir dir;
   const auto ps = encode_packets(4.5);
-  const auto messages = scan_messages(ps, 0, test::RosEncoding::kRos1);
+  const auto messages = test::velodyne_scan_messages(ps, 0, test::RosEncoding::kRos1);
   ASSERT_GE(messages.size(), 4u);
   const fs::path full = dir.path() / "full.bag";
   test::write_rosbag1(full, {{"/velodyne_packets", "velodyne_msgs/VelodyneScan"}}, messages,
@@ -437,7 +402,7 @@ TEST(Rosbag1, InterruptedRecordingsKeepTheirCompleteMessages) {
 }
 
 TEST(Rosbag1, CorruptBytesNeverCrash) {
-  TempDir dir;
+  test::TempDir dir;
   std::vector<std::vector<std::uint8_t>> expected;
   for (int i = 0; i < 4; ++i) expected.push_back(fixture_scan(i));
   const auto bytes = read_file(kFixtures / "ros1_lz4.bag");
@@ -457,7 +422,7 @@ TEST(Rosbag1, CorruptBytesNeverCrash) {
 }
 
 TEST(Rosbag1, MalformedHeadersAreClearErrors) {
-  TempDir dir;
+  test::TempDir dir;
   const auto expect_error = [&](const std::vector<std::uint8_t>& b, const std::string& needle) {
     const fs::path p = dir.path() / "m.bag";
     write_file(p, b);
@@ -510,12 +475,13 @@ TEST(Rosbag1, MalformedHeadersAreClearErrors) {
 }
 
 TEST(Rosbag1, SameScansAsTheRos2BagOfTheSamePackets) {
-  TempDir dir;
+  test::TempDir dir;
   const auto ps = encode_packets(3.2);
   test::write_rosbag1(dir.path() / "a.bag", {{"/velodyne_packets", "velodyne_msgs/VelodyneScan"}},
-                      scan_messages(ps, 0, test::RosEncoding::kRos1), {"none", 100'000, true});
+                      test::velodyne_scan_messages(ps, 0, test::RosEncoding::kRos1),
+                      {"none", 100'000, true});
   test::write_rosbag2(dir.path() / "b", {{"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"}},
-                      scan_messages(ps, 0, test::RosEncoding::kCdr));
+                      test::velodyne_scan_messages(ps, 0, test::RosEncoding::kCdr));
   const ScanSourceOptions defaults;
   auto a = open_scan_source((dir.path() / "a.bag").string(), defaults);
   std::vector<core::OrganizedScan> from_ros2;

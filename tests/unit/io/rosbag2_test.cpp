@@ -1,24 +1,28 @@
-// ROS 2 bags through the generic bag source: the real bag gives the pcap's scans cell for cell
-// and reproduces the reference scan; synthetic bags (test support writer) cover both message
-// types, topic choice, split bags and corrupt input.
+// ROS 2 bags through the generic bag source: the real bag carries the pcap's packets byte for
+// byte, gives its scans cell for cell and reproduces the reference scan; synthetic bags (test
+// support writer) cover both message types, topic choice, the Velodyne source factory, split
+// bags and corrupt input.
 #include <gtest/gtest.h>
 #include <sqlite3.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <numbers>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/pcap_reader.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
 #include "ringtrack/io/rosbag_source.hpp"
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/io/velodyne_pcap_source.hpp"
+#include "ringtrack/io/velodyne_source.hpp"
 #include "support/rosbag_writers.hpp"
+#include "support/temp_dir.hpp"
 #include "support/velodyne_encoder.hpp"
 
 namespace ringtrack::io {
@@ -41,25 +45,6 @@ fs::path data_dir() {
     GTEST_SKIP() << "real VLP-16 test data not found at " << (dir)                           \
                  << " (set RINGTRACK_TEST_DATA to the folder holding vlp16_indoor_nebula/)"; \
   }
-
-class TempDir {
- public:
-  TempDir() {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    path_ = fs::temp_directory_path() /
-            ("ringtrack_ros2_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  [[nodiscard]] const fs::path& path() const { return path_; }
-
- private:
-  fs::path path_;
-};
 
 // Same cells and azimuths; stamps within a tolerance (a pcap stores receive stamps in us, the
 // real bag in ns).
@@ -107,6 +92,42 @@ TEST(Rosbag2, RealBagGivesThePcapScansCellForCell) {
   }
 }
 
+// The bag was recorded from the same packets as the capture: every packet, in order, byte for
+// byte, with its receive stamp (the capture's have us resolution).
+TEST(Rosbag2, RealBagCarriesThePcapPacketsByteForByte) {
+  const fs::path dir = data_dir();
+  REQUIRE_REAL_DATA(dir);
+  Rosbag2Reader bag(dir / "ros2_bag");
+  ASSERT_EQ(bag.topics().size(), 1u);
+  EXPECT_EQ(bag.topics()[0].name, "/velodyne_packets");
+  EXPECT_EQ(bag.topics()[0].type, "velodyne_msgs/msg/VelodyneScan");
+  EXPECT_EQ(bag.topics()[0].messages, 4u);
+  bag.select_topic("/velodyne_packets");
+  PcapReader pcap(dir / "vlp16_dual_4scans.pcap");
+  UdpDatagram d;
+  RosbagMessage m;
+  std::vector<VelodyneScanPacket> packets;  // of the current message
+  std::size_t used = 0;
+  std::size_t n = 0;
+  while (pcap.next(d)) {
+    while (used == packets.size()) {
+      ASSERT_TRUE(bag.next(m)) << "the bag ends after " << n << " packets";
+      packets =
+          parse_velodyne_scan(m.data, bag.serialization(), "message " + std::to_string(m.index));
+      used = 0;
+    }
+    const VelodyneScanPacket& p = packets[used++];
+    ASSERT_TRUE(std::equal(d.payload.begin(), d.payload.end(), p.data.begin(), p.data.end()))
+        << "packet " << n;
+    EXPECT_LE(std::abs(p.stamp_ns - d.stamp_ns), 1000) << "packet " << n;
+    ++n;
+  }
+  EXPECT_EQ(n, 603u);
+  EXPECT_EQ(used, packets.size());
+  EXPECT_FALSE(bag.next(m));
+  EXPECT_EQ(m.index, 4u);
+}
+
 // reference_last_scan.pcd (see the data README): nebula's decoding of the last revolution, dual
 // return; with the last return selected, every reference return of the first block of each
 // pair (and each identical pair) must be a cell of the bag's last scan, and vice versa.
@@ -119,6 +140,8 @@ TEST(Rosbag2, RealBagReproducesTheReferenceScan) {
   std::optional<core::OrganizedScan> last;
   while (auto s = bag.next()) last = std::move(s);
   ASSERT_TRUE(last.has_value());
+  EXPECT_EQ(bag.stats().messages, 4u);
+  EXPECT_EQ(bag.stats().packets, 603u);
   const core::OrganizedScan& scan = *last;
 
   std::ifstream in(dir / "reference_last_scan.pcd", std::ios::binary);
@@ -199,17 +222,7 @@ std::vector<test::EncodedVelodynePacket> encode_packets(double revolutions) {
 
 std::vector<test::TestBagMessage> scan_messages(const std::vector<test::EncodedVelodynePacket>& ps,
                                                 std::size_t topic) {
-  std::vector<test::TestBagMessage> out;
-  for (std::size_t i = 0; i < ps.size(); i += 75) {
-    test::TestVelodyneScan s;
-    s.stamp_ns = ps[i].host_stamp_ns;
-    for (std::size_t k = i; k < std::min(ps.size(), i + 75); ++k) {
-      s.packets.push_back({ps[k].host_stamp_ns, ps[k].payload});
-    }
-    out.push_back({topic, s.packets.back().stamp_ns,
-                   test::serialize_velodyne_scan(s, test::RosEncoding::kCdr)});
-  }
-  return out;
+  return test::velodyne_scan_messages(ps, topic, test::RosEncoding::kCdr);
 }
 
 std::vector<core::OrganizedScan> decode_direct(const std::vector<test::EncodedVelodynePacket>& ps) {
@@ -236,13 +249,24 @@ test::TestBagMessage cloud_message(std::size_t topic, int m) {
                                       test::RosEncoding::kCdr)};
 }
 
+void expect_input_error(const std::function<void()>& f, const std::vector<std::string>& needles) {
+  try {
+    f();
+    ADD_FAILURE() << "expected an InputError mentioning " << needles.front();
+  } catch (const core::InputError& e) {
+    for (const auto& n : needles) {
+      EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what();
+    }
+  }
+}
+
 const std::vector<test::TestBagTopic> kTopics{
     {"/rosout", "rcl_interfaces/msg/Log"},
     {"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"},
     {"/velodyne_points", "sensor_msgs/msg/PointCloud2"}};
 
 TEST(Rosbag2, BothMessageTypesAndTopicChoice) {
-  TempDir dir;
+  test::TempDir dir;
   const auto ps = encode_packets(3.3);
   auto messages = scan_messages(ps, 1);
   for (int m = 0; m < 3; ++m) messages.push_back(cloud_message(2, m));
@@ -254,6 +278,9 @@ TEST(Rosbag2, BothMessageTypesAndTopicChoice) {
     RosbagScanSource source(bag);  // the first supported topic
     EXPECT_EQ(source.topic().name, "/velodyne_packets");
     expect_same_scans(source, decode_direct(ps));
+    EXPECT_EQ(source.stats().messages, scan_messages(ps, 1).size());
+    EXPECT_EQ(source.stats().packets, ps.size());
+    EXPECT_EQ(source.decoder().stats().decoded_packets, ps.size());
     EXPECT_EQ(source.reader().other_messages(), 4u);
   }
   RosbagSourceOptions options;
@@ -287,8 +314,97 @@ TEST(Rosbag2, BothMessageTypesAndTopicChoice) {
   EXPECT_EQ(RosbagScanSource(bag / "bag_0.db3").topic().name, "/velodyne_packets");
 }
 
+TEST(Rosbag2, SeveralVelodyneTopicsAndTheVelodyneSourceFactory) {
+  test::TempDir dir;
+  const auto ps = encode_packets(3.3);
+  const fs::path bag = dir / "two";
+  test::write_rosbag2(
+      bag, {{"/a", "velodyne_msgs/msg/VelodyneScan"}, {"/b", "velodyne_msgs/msg/VelodyneScan"}},
+      scan_messages(ps, 1));
+  const auto expected = decode_direct(ps);
+  ASSERT_GE(expected.size(), 2u);
+  {
+    RosbagScanSource source(bag);  // /a has no messages: the first topic with messages
+    EXPECT_EQ(source.topic().name, "/b");
+    expect_same_scans(source, expected);
+  }
+  RosbagSourceOptions options;
+  options.topic = "/a";  // chosen, but empty: a clear error, not an empty stream
+  expect_input_error(
+      [&] {
+        RosbagScanSource empty(bag, options);
+        empty.next();
+      },
+      {"two", "no decodable Velodyne data packets on /a"});
+
+  // open_velodyne_source reads ROS 2 bags through the same bag source.
+  EXPECT_EQ(parse_velodyne_input_format("rosbag2"), VelodyneInputFormat::kRosbag2);
+  EXPECT_EQ(parse_velodyne_input_format("bag2"), VelodyneInputFormat::kRosbag2);
+  EXPECT_EQ(parse_velodyne_input_format("ros2"), VelodyneInputFormat::kRosbag2);
+  EXPECT_EQ(guess_velodyne_input_format(bag.string()), VelodyneInputFormat::kRosbag2);
+  EXPECT_EQ(guess_velodyne_input_format((bag / "two_0.db3").string()),
+            VelodyneInputFormat::kRosbag2);
+  for (const auto format : {VelodyneInputFormat::kRosbag2, VelodyneInputFormat::kAuto}) {
+    VelodyneSourceOptions v;
+    v.format = format;
+    auto source = open_velodyne_source(bag.string(), v);
+    expect_same_scans(*source, expected);
+    EXPECT_EQ(source->model().name, "VLP-16");
+    EXPECT_NE(source->summary().find(std::to_string(scan_messages(ps, 1).size()) +
+                                     " messages of /b (velodyne_msgs/msg/VelodyneScan), " +
+                                     std::to_string(ps.size()) + " data packets decoded, " +
+                                     std::to_string(expected.size()) + " scans"),
+              std::string::npos)
+        << source->summary();
+  }
+  VelodyneSourceOptions v;
+  v.format = VelodyneInputFormat::kRosbag2;
+  v.topic = "/a";
+  expect_input_error([&] { open_velodyne_source(bag.string(), v)->next(); },
+                     {"no decodable Velodyne data packets on /a"});
+  v.topic = "/nope";
+  EXPECT_THROW(open_velodyne_source(bag.string(), v), core::ConfigError);
+  v.topic.clear();
+  expect_input_error([&] { open_velodyne_source((dir / "missing.db3").string(), v); },
+                     {"missing.db3"});
+}
+
+// Both serializations carry the same packets; DDS pads CDR payloads to 4 bytes (the real bag's
+// messages end with 2 such bytes), ROS 1 messages end with the last packet.
+TEST(Rosbag2, VelodyneScanMessagesParseInBothSerializations) {
+  test::TestVelodyneScan scan;
+  scan.seq = 9;
+  scan.stamp_ns = 1'673'400'471'837'873'222;
+  for (int k = 0; k < 3; ++k) {
+    test::TestVelodynePacket p;
+    p.stamp_ns = scan.stamp_ns + 1'327'000LL * k + k;
+    for (int i = 0; i < 1206; ++i) p.data.push_back(static_cast<std::uint8_t>((i * 13 + k) % 256));
+    scan.packets.push_back(std::move(p));
+  }
+  for (const auto encoding : {test::RosEncoding::kRos1, test::RosEncoding::kCdr}) {
+    const auto serialization =
+        encoding == test::RosEncoding::kCdr ? RosSerialization::kCdr : RosSerialization::kRos1;
+    auto bytes = test::serialize_velodyne_scan(scan, encoding);
+    const auto packets = parse_velodyne_scan(bytes, serialization, "m");
+    ASSERT_EQ(packets.size(), 3u);
+    for (std::size_t k = 0; k < 3; ++k) {
+      EXPECT_EQ(packets[k].stamp_ns, scan.packets[k].stamp_ns);
+      EXPECT_TRUE(std::equal(packets[k].data.begin(), packets[k].data.end(),
+                             scan.packets[k].data.begin(), scan.packets[k].data.end()));
+    }
+    bytes.push_back(0);
+    bytes.push_back(0);
+    if (encoding == test::RosEncoding::kCdr) {
+      EXPECT_EQ(parse_velodyne_scan(bytes, serialization, "m").size(), 3u);
+    } else {
+      expect_input_error([&] { parse_velodyne_scan(bytes, serialization, "m"); },
+                         {"m: VelodyneScan", "2 bytes after the last packet"});
+    }
+  }
+}
+
 TEST(Rosbag2, SplitBagsAreReadFileByFile) {
-  TempDir dir;
+  test::TempDir dir;
   const auto ps = encode_packets(3.3);
   const auto messages = scan_messages(ps, 0);
   ASSERT_GE(messages.size(), 4u);
@@ -322,19 +438,8 @@ TEST(Rosbag2, SplitBagsAreReadFileByFile) {
   expect_same_scans(source, decode_direct(ps));
 }
 
-void expect_input_error(const std::function<void()>& f, const std::vector<std::string>& needles) {
-  try {
-    f();
-    ADD_FAILURE() << "expected an InputError mentioning " << needles.front();
-  } catch (const core::InputError& e) {
-    for (const auto& n : needles) {
-      EXPECT_NE(std::string(e.what()).find(n), std::string::npos) << e.what();
-    }
-  }
-}
-
 TEST(Rosbag2, CorruptBagsAreClearErrors) {
-  TempDir dir;
+  test::TempDir dir;
   const auto ps = encode_packets(0.5);
   auto messages = scan_messages(ps, 1);
   ASSERT_EQ(messages.size(), 1u);
@@ -351,6 +456,28 @@ TEST(Rosbag2, CorruptBagsAreClearErrors) {
         }
       },
       {"cut_0.db3", "topic /velodyne_packets, message 2", "claims"});
+  // Broken VelodyneScan messages (after a good one): a packet count beyond the message, an
+  // encapsulation other than plain CDR, a header alone.
+  auto many = good;
+  many[28] = 0xFF;  // the packet count (after stamp, frame_id "velodyne" and padding)
+  auto big_endian_xcdr2 = good;
+  big_endian_xcdr2[1] = 7;
+  const std::vector<std::pair<std::vector<std::uint8_t>, std::string>> broken{
+      {many, "packets: claims 255 elements"},
+      {big_endian_xcdr2, "unsupported CDR encapsulation 0,7"},
+      {{0, 1, 0, 0}, "truncated"}};
+  for (std::size_t k = 0; k < broken.size(); ++k) {
+    const fs::path path = dir / ("broken" + std::to_string(k));
+    test::write_rosbag2(path, {kTopics[1]}, {{0, 1, good}, {0, 2, broken[k].first}});
+    expect_input_error(
+        [&] {
+          RosbagScanSource s(path);
+          while (s.next()) {
+          }
+        },
+        {"broken" + std::to_string(k) + "_0.db3", "topic /velodyne_packets, message 2",
+         broken[k].second, "(at byte "});
+  }
   // A cloud cut short.
   auto cloud = cloud_message(2, 1);
   cloud.data.resize(cloud.data.size() - 100);
