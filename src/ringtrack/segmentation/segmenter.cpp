@@ -90,7 +90,12 @@ struct FilterState {
       window->update<-1>(key + a, key + b + 1);
       updates += static_cast<std::size_t>(b - a + 1);
     };
-    if (right < left || new_left > right || new_right < left) {
+    const int shift = new_left - left;
+    if (right >= left && shift > 0 && new_right - right == shift && shift <= right - left + 1) {
+      // The common move: same width, forward, overlapping or adjacent.
+      window->replace(key + left, key + right + 1, shift);
+      updates = 2 * static_cast<std::size_t>(shift);
+    } else if (right < left || new_left > right || new_right < left) {
       add(new_left, new_right);
       remove(left, right);
     } else {
