@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <limits>
 #include <optional>
 
@@ -41,7 +42,8 @@ float float_at(std::int64_t order) {
                                            std::numeric_limits<std::int32_t>::min());
 }
 
-// The float next to x where pred flips, given pred(from) != pred(to) and pred monotone between.
+// The first float, going from `from` towards `to`, where pred differs from pred(from); needs
+// pred(from) != pred(to) and pred monotone in between.
 template <class Pred>
 float boundary(float from, float to, Pred pred) {
   std::int64_t a = float_order(from), b = float_order(to);  // pred(a) != pred(b)
@@ -50,16 +52,27 @@ float boundary(float from, float to, Pred pred) {
     const std::int64_t mid = a + (b - a) / 2;
     (pred(float_at(mid)) == at_a ? a : b) = mid;
   }
-  return float_at(b);  // the first float, going from `from` towards `to`, with pred != pred(from)
+  return float_at(b);
 }
 
 }  // namespace
 
 DeltaRule delta_rule(const core::SegmentationConfig& c) {
   const auto reaches = [&c](float d) { return certainty(d, c) >= c.certainty_threshold; };
-  // Conservative rule: certainty is 0 outside [delta_min, delta_max] and 1 on [low, high].
-  DeltaRule rule{static_cast<float>(c.delta_min_m), static_cast<float>(c.delta_low_m),
-                 static_cast<float>(c.delta_high_m), static_cast<float>(c.delta_max_m)};
+  // Conservative rule: certainty is 0 outside [delta_min, delta_max] and 1 on [low, high], taken
+  // inwards to floats (the bounds are doubles).
+  const auto float_at_least = [](double x) {
+    float f = static_cast<float>(x);
+    while (static_cast<double>(f) < x) f = std::nextafter(f, 1e30f);
+    return f;
+  };
+  const auto float_at_most = [](double x) {
+    float f = static_cast<float>(x);
+    while (static_cast<double>(f) > x) f = std::nextafter(f, -1e30f);
+    return f;
+  };
+  const DeltaRule rule{float_at_least(c.delta_min_m), float_at_least(c.delta_low_m),
+                       float_at_most(c.delta_high_m), float_at_most(c.delta_max_m)};
   // A float where the threshold is reached, from the plateau: near delta_low or delta_high.
   std::optional<float> peak;
   for (const double anchor : {c.delta_low_m, c.delta_high_m}) {

@@ -33,12 +33,21 @@ class OrderStatWindow {
     lo_.below += kSign * lo_below;
     hi_.below += kSign * hi_below;
   }
-  /// Removes one key and adds another: the window slid by one cell.
-  void slide(std::uint32_t out, std::uint32_t in) {
-    change<-1>(out);
-    change<1>(in);
-    lo_.below += static_cast<int>(in < lo_.bucket) - static_cast<int>(out < lo_.bucket);
-    hi_.below += static_cast<int>(in < hi_.bucket) - static_cast<int>(out < hi_.bucket);
+  /// Removes the keys [out, out + n) and adds [in, in + n): a window moved by n cells. One pass
+  /// instead of an add and a remove.
+  void replace(const std::uint32_t* out, const std::uint32_t* in, int n) {
+    for (int k = 0; k < n; ++k) {
+      change<-1>(out[k]);
+      change<1>(in[k]);
+    }
+    const std::uint32_t lo_bucket = lo_.bucket, hi_bucket = hi_.bucket;
+    int lo_delta = 0, hi_delta = 0;
+    for (int k = 0; k < n; ++k) {
+      lo_delta += static_cast<int>(in[k] < lo_bucket) - static_cast<int>(out[k] < lo_bucket);
+      hi_delta += static_cast<int>(in[k] < hi_bucket) - static_cast<int>(out[k] < hi_bucket);
+    }
+    lo_.below += lo_delta;
+    hi_.below += hi_delta;
   }
   /// Ranks (0-based, ascending) whose buckets settle() tracks; need 0 <= lo <= hi < size().
   void set_ranks(int lo, int hi) {

@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/segmentation/direct_median.hpp"
 #include "ringtrack/segmentation/kernel.hpp"
 #include "ringtrack/segmentation/order_stat_window.hpp"
 #include "ringtrack/segmentation/radius_table.hpp"
@@ -15,36 +16,11 @@
 
 namespace ringtrack::segmentation {
 
+using detail::direct_median;
+using detail::kDirectRadius;
 using detail::OrderStatWindow;
 using detail::RadiusTable;
 using detail::RangeBuckets;
-
-namespace {
-// Radius up to which a median is computed directly from the values (at most 5 of them).
-constexpr int kDirectRadius = 2;
-
-// The median of the 2 r + 1 values around *centre, r <= kDirectRadius, by comparisons only.
-float direct_median(const float* centre, int r) {
-  const auto median3 = [](float a, float b, float c) {
-    return std::max(std::min(a, b), std::min(std::max(a, b), c));
-  };
-  if (r == 0) return centre[0];
-  if (r == 1) return median3(centre[-1], centre[0], centre[1]);
-  // Of five values: order the outer pairs, a <= b and c <= d, so that a <= c. Then a is at most
-  // three others and never above the median: the median is the second smallest of b, c, d and
-  // the centre, i.e. of the ordered pairs (b, e) and (c, d).
-  float a = centre[-2], b = centre[-1], c = centre[1], d = centre[2], e = centre[0];
-  if (a > b) std::swap(a, b);
-  if (c > d) std::swap(c, d);
-  if (a > c) {  // swap the pairs; the new a is not needed further
-    c = a;
-    std::swap(b, d);
-  }
-  if (b > e) std::swap(b, e);
-  return std::min(std::max(b, c), std::min(e, d));
-}
-
-}  // namespace
 
 // Per-column-count state: radius tables and scratch buffers reused across scans.
 struct Segmenter::Tables {
@@ -114,7 +90,12 @@ struct FilterState {
       window->update<-1>(key + a, key + b + 1);
       updates += static_cast<std::size_t>(b - a + 1);
     };
-    if (right < left || new_left > right || new_right < left) {
+    const int shift = new_left - left;
+    if (right >= left && shift > 0 && new_right - right == shift && shift <= right - left + 1) {
+      // The common move: same width, forward, overlapping or adjacent.
+      window->replace(key + left, key + right + 1, shift);
+      updates = 2 * static_cast<std::size_t>(shift);
+    } else if (right < left || new_left > right || new_right < left) {
       add(new_left, new_right);
       remove(left, right);
     } else {

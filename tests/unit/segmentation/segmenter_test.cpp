@@ -9,7 +9,9 @@
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/segmentation/kernel.hpp"
 #include "ringtrack/segmentation/radius_table.hpp"
+#include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/simple_scene.hpp"
+#include "ringtrack/sim/simulator.hpp"
 #include "support/naive_segmentation.hpp"
 
 namespace ringtrack::segmentation {
@@ -193,6 +195,60 @@ TEST(Segmenter, MatchesNaiveOnRenderedScenesAndOtherConfigs) {
     other.delta_max_m = 3.0;
     other.certainty_threshold = 0.9;
     expect_matches_naive(rendered.scan, other);
+  }
+}
+
+// Random configurations within the schema's ranges that still mean something.
+SegmentationConfig random_config(std::mt19937& rng) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  SegmentationConfig c;
+  c.min_width_m = 0.02 + 0.4 * u(rng);
+  c.max_width_m = c.min_width_m + 3.0 * u(rng);
+  c.max_kernel_radius = 20 + static_cast<int>(600 * u(rng));
+  c.delta_min_m = -0.2 + 0.5 * u(rng);
+  c.delta_low_m = c.delta_min_m + 0.5 * u(rng);
+  c.delta_high_m = c.delta_low_m + 5.0 * u(rng);
+  c.delta_max_m = c.delta_high_m + 5.0 * u(rng);
+  c.certainty_threshold = 0.01 + 0.99 * u(rng);
+  return c;
+}
+
+TEST(Segmenter, MatchesNaiveOnPiecewiseSurfaces) {
+  // Runs of flat and sloped surfaces, objects and gaps at every range, so the references jump,
+  // their lazy bounds lag and the radius changes abruptly; with random configurations.
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  std::normal_distribution<float> noise(0.0f, 1.0f);
+  for (int trial = 0; trial < 24; ++trial) {
+    std::vector<float> row(4 * 1800);
+    std::size_t at = 0;
+    while (at < row.size()) {
+      const auto length = static_cast<std::size_t>(1 + std::pow(u(rng), 2.0f) * 400);
+      const float range = 0.3f + std::pow(u(rng), 2.0f) * 120.0f;
+      const float slope = u(rng) < 0.3f ? (u(rng) - 0.5f) * 0.05f * range : 0.0f;
+      const float sigma = u(rng) * 0.05f;
+      const bool gap = u(rng) < 0.1f;
+      for (std::size_t k = 0; k < length && at < row.size(); ++k, ++at) {
+        row[at] = gap ? std::nanf("")
+                      : std::max(0.05f, range + slope * static_cast<float>(k) + sigma * noise(rng));
+      }
+    }
+    const auto scan = scan_from(4, 1800, [&](int r, int c) { return row[r * 1800 + c]; });
+    expect_matches_naive(scan, trial % 2 ? random_config(rng) : SegmentationConfig{});
+  }
+}
+
+TEST(Segmenter, MatchesNaiveOnSimulatedScans) {
+  for (const auto& scenario : {sim::builtin_scenario("park"),
+                               sim::with_moving_sensor(sim::builtin_scenario("park"))}) {
+    sim::Simulator simulator(scenario, 3);
+    std::mt19937 rng(9);
+    for (int i = 0; i < 12; ++i) {
+      const auto simulated = simulator.next();
+      if (i % 4 != 3) continue;
+      expect_matches_naive(simulated.scan, SegmentationConfig{});
+      expect_matches_naive(simulated.scan, random_config(rng));
+    }
   }
 }
 
