@@ -1,7 +1,6 @@
 #include "ringtrack/segmentation/segmenter.hpp"
 
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <numbers>
 #include <optional>
@@ -56,7 +55,8 @@ int allowed_drift(int rho) {
 // side that matters for each bound, so its median lies in [os(rho - D), os(rho + D)] of the
 // reference window. One reference position thus serves 2 D + 1 consecutive points; moving it costs
 // two key updates per cell moved, the same as sliding cell by cell, but the tracked ranks are read
-// once per position instead of once per point.
+// once per position instead of once per point. Points these bounds leave open get tighter ones
+// for their own ranks (bounds_for).
 struct FilterState {
   OrderStatWindow* window;
   const std::uint32_t* key;
@@ -126,8 +126,8 @@ struct FilterState {
     return reshape(centre - rho, centre + rho);
   }
 
-  // Bounds of the medians of the points served: valid always, tight after tighten(). Read once
-  // per reference position (the window does not change in between).
+  // Bounds of the medians of every point served (lazy, so possibly loose: see OrderStatWindow).
+  // Read once per reference position; the window does not change in between.
   float lower() {
     if (!lo_ready) {
       lo = RangeBuckets::lower(window->lo_bound_bucket());

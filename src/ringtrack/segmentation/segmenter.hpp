@@ -24,11 +24,12 @@ struct SegmenterStats {
 /// median over a window spanning min_width_m and a background median over one spanning
 /// max_width_m at the point's own range; windows wrap across the 0/360 degree seam.
 ///
-/// Why it is fast: each filter keeps a bucket histogram of a reference window that slides by
-/// one cell per point (O(1)); the reference radius only changes when the point's own radius
-/// drifts too far from it. The medians of the point's true window are bracketed by order
-/// statistics of the reference window, which settles the decision for nearly every point; the
-/// rest are computed exactly. The labels equal the naive nth_element result bit for bit.
+/// Why it is fast (docs/segmentation.md): each filter keeps a bucket histogram of a reference
+/// window that moves along with the points (O(1) per point); the reference radius only changes
+/// when the point's own radius drifts too far from it. The medians of the point's true window are
+/// bounded by order statistics of the reference window, and the certainty rule is an interval of
+/// the median difference, which settles the decision for nearly every point; the rest get tighter
+/// bounds, then exact medians. The labels equal the naive nth_element result bit for bit.
 class Segmenter {
  public:
   explicit Segmenter(const core::SegmentationConfig& config);
