@@ -1,8 +1,9 @@
 #pragma once
-// A multiset of bucket keys (the values in a median window) with two tracked order statistics.
-// Adding or removing a key is O(1); reading a tracked rank's bucket moves its pointer by as many
-// non-empty buckets as the changes since the last read shifted it (found with a bitmap of
-// non-empty buckets), so a window sliding by one cell costs O(1) whatever its size.
+// A multiset of bucket keys (the values in a median window) with two rank pointers. Adding or
+// removing a key is O(1) and keeps each pointer's count of keys below it. Reading a bound moves a
+// pointer only if the changes made its bound invalid, by as many non-empty buckets as needed
+// (found with a bitmap of non-empty buckets); exact reads (buckets_at, track_rank) move it to the
+// rank. A window moving by one cell per point thus costs O(1) per point whatever its size.
 
 #include <bit>
 #include <cstdint>
