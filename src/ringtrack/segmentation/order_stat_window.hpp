@@ -2,7 +2,7 @@
 // A multiset of bucket keys (the values in a median window) with two rank pointers. Adding or
 // removing a key is O(1) and keeps each pointer's count of keys below it. Reading a bound moves a
 // pointer only if the changes made its bound invalid, by as many non-empty buckets as needed
-// (found with a bitmap of non-empty buckets); exact reads (buckets_at, track_rank) move it to the
+// (found with a bitmap of non-empty buckets); exact reads (tighten, track_rank) move it to the
 // rank. A window moving by one cell per point thus costs O(1) per point whatever its size.
 
 #include <bit>
@@ -74,17 +74,10 @@ class OrderStatWindow {
     while (hi_.below + count_[hi_.bucket] <= hi_.rank) step_up(hi_);
     return hi_.bucket;
   }
-  /// The buckets holding ranks lo <= hi exactly (0 <= lo, hi < size()), for one query. The
-  /// pointers stay there afterwards but keep their tracked ranks, so later bound reads stay valid.
-  [[nodiscard]] std::pair<std::uint32_t, std::uint32_t> buckets_at(int lo, int hi) {
-    const int lo_rank = lo_.rank, hi_rank = hi_.rank;
-    lo_.rank = lo;
-    hi_.rank = hi;
+  /// Moves both pointers to the buckets holding their ranks exactly: the tightest bounds.
+  void tighten() {
     settle(lo_);
     settle(hi_);
-    lo_.rank = lo_rank;
-    hi_.rank = hi_rank;
-    return {lo_.bucket, hi_.bucket};
   }
   [[nodiscard]] int size() const { return size_; }
 

@@ -55,8 +55,7 @@ int allowed_drift(int rho) {
 // side that matters for each bound, so its median lies in [os(rho - D), os(rho + D)] of the
 // reference window. One reference position thus serves 2 D + 1 consecutive points; moving it costs
 // two key updates per cell moved, the same as sliding cell by cell, but the tracked ranks are read
-// once per position instead of once per point. Points these bounds leave open get tighter ones
-// for their own ranks (bounds_for).
+// once per position instead of once per point.
 struct FilterState {
   OrderStatWindow* window;
   const std::uint32_t* key;
@@ -146,11 +145,11 @@ struct FilterState {
   // serves). Of its 2 r + 1 values, `outside` lie outside the reference window and `missing`
   // reference values lie outside it, so its median (rank r) is at least the reference's rank
   // r - outside and at most its rank r + missing.
-  std::pair<float, float> bounds_for(int j, int r) {
-    const int outside = std::max(0, left - (j - r)) + std::max(0, (j + r) - right);
-    const int missing = std::max(0, (j - r) - left) + std::max(0, right - (j + r));
-    const auto buckets = window->buckets_at(r - outside, r + missing);
-    return {RangeBuckets::lower(buckets.first), RangeBuckets::upper(buckets.second)};
+  // Tight bounds for every point served: the lazy pointers moved to their tracked ranks.
+  std::pair<float, float> tight_bounds() {
+    window->tighten();
+    lo_ready = hi_ready = false;
+    return {lower(), upper()};
   }
 
   // For an exact window: becomes point j's own window (radius r), cheap when the previous query
@@ -212,14 +211,14 @@ int decide_open_point(RingFilters& f, const std::vector<float>& value,
   const auto i = static_cast<std::size_t>(c);
   const int rn = f.noise.radius->radius(value[i], key[i]);
   const int rb = f.background.radius->radius(value[i], key[i]);
-  // 1) Tight bounds from the same reference windows, for this point's own ranks.
+  // 1) The same reference windows' bounds, tightened (the lazy pointers lag after object edges).
   float noise_lo = 0, noise_hi = 0;
   if (noise_median) {
     noise_lo = noise_hi = *noise_median;
   } else {
-    std::tie(noise_lo, noise_hi) = f.noise.bounds_for(c, rn);
+    std::tie(noise_lo, noise_hi) = f.noise.tight_bounds();
   }
-  const auto [background_lo, background_hi] = f.background.bounds_for(c, rb);
+  const auto [background_lo, background_hi] = f.background.tight_bounds();
   int label = decide(noise_lo, noise_hi, background_lo, background_hi, rule);
   if (label >= 0) return label;
   // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window is the

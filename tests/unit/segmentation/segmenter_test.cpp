@@ -239,8 +239,8 @@ TEST(Segmenter, MatchesNaiveOnPiecewiseSurfaces) {
 }
 
 TEST(Segmenter, MatchesNaiveOnSimulatedScans) {
-  for (const auto& scenario : {sim::builtin_scenario("park"),
-                               sim::with_moving_sensor(sim::builtin_scenario("park"))}) {
+  for (const auto& scenario :
+       {sim::builtin_scenario("park"), sim::with_moving_sensor(sim::builtin_scenario("park"))}) {
     sim::Simulator simulator(scenario, 3);
     std::mt19937 rng(9);
     for (int i = 0; i < 12; ++i) {
