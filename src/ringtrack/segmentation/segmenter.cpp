@@ -44,7 +44,7 @@ namespace {
 // rho - D and rho + D in a window of 2 rho + 1). Larger means fewer bracket reads but looser
 // brackets.
 int allowed_drift(int rho) {
-  return std::min(rho, 2 + rho / 8);
+  return std::min(rho, 2 + rho / 6);
 }
 
 // One median filter's reference window over the extended ring: a histogram of the keys of
