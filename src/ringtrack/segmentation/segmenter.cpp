@@ -141,10 +141,6 @@ struct FilterState {
     }
     return hi;
   }
-  // Tight bounds of the median of point j's own window [j - r, j + r] (a point the reference
-  // serves). Of its 2 r + 1 values, `outside` lie outside the reference window and `missing`
-  // reference values lie outside it, so its median (rank r) is at least the reference's rank
-  // r - outside and at most its rank r + missing.
   // Tight bounds for every point served: the lazy pointers moved to their tracked ranks.
   std::pair<float, float> tight_bounds() {
     window->tighten();
