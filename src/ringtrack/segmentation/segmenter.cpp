@@ -204,9 +204,6 @@ int decide_open_point(RingFilters& f, const std::vector<float>& value,
                       const core::SegmentationConfig& config, const DeltaRule& rule,
                       SegmenterStats& stats) {
   ++stats.tight_decisions;
-  const auto i = static_cast<std::size_t>(c);
-  const int rn = f.noise.radius->radius(value[i], key[i]);
-  const int rb = f.background.radius->radius(value[i], key[i]);
   // 1) The same reference windows' bounds, tightened (the lazy pointers lag after object edges).
   float noise_lo = 0, noise_hi = 0;
   if (noise_median) {
@@ -220,6 +217,9 @@ int decide_open_point(RingFilters& f, const std::vector<float>& value,
   // 2) The buckets (0.1 % wide) of the exact medians: first the noise median, whose window is the
   // narrow, cheap one, then if still needed the background median.
   ++stats.bucket_decisions;
+  const auto i = static_cast<std::size_t>(c);
+  const int rn = f.noise.radius->radius(value[i], key[i]);
+  const int rb = f.background.radius->radius(value[i], key[i]);
   std::pair<std::uint32_t, int> nb{};
   if (!noise_median) {
     nb = f.noise_exact.median_bucket(c, rn);
