@@ -110,6 +110,8 @@ SensorModel SensorModel::vlp32c(double scan_rate_hz) {
   // VLP-32C user manual: elevation and azimuth offset per laser id; lasers fire in pairs every
   // 2.304 us, a sequence of 16 firings takes 55.296 us. The manual's offsets are added to the
   // packet's clockwise azimuth; ringtrack azimuths turn counter-clockwise, hence the negation.
+  // Ids 14-31 were checked against the VLP-32C User Manual (63-9325 Rev. C, sec. 9.3.2, p. 59);
+  // ids 0-13 (the previous page) could not be checked here, nor any against a real VLP-32C capture.
   const std::vector<double> elevation{
       -25,    -1,     -1.667, -15.639, -11.31, 0,      -0.667, -8.843, -7.254, 0.333,  -0.333,
       -6.148, -5.333, 1.333,  0.667,   -4,     -4.667, 1.667,  1,      -3.667, -3.333, 3.333,
