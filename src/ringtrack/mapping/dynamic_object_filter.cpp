@@ -1,17 +1,89 @@
 #include "ringtrack/mapping/dynamic_object_filter.hpp"
 
+#include <algorithm>
+#include <limits>
 #include <string>
 
 #include "ringtrack/core/error.hpp"
 
 namespace ringtrack::mapping {
 
+namespace {
+
+std::size_t block_count(std::size_t points) {
+  return (points + LoggedScan::kBlockPoints - 1) / LoggedScan::kBlockPoints;
+}
+
+// Bounds per block of LoggedScan::kBlockPoints points. This runs on every scan, so the block's
+// coordinates are read as one float array, four at a time, into three vector accumulators whose
+// lanes hold x y z x / y z x y / z x y z. A block whose bounds come out non-finite (a NaN point)
+// gets unbounded bounds, so that it is always tested point by point.
+void compute_block_bounds(const std::vector<Eigen::Vector3f>& points,
+                          std::vector<core::Box3>& bounds) {
+  constexpr std::size_t kBlock = LoggedScan::kBlockPoints;
+  static_assert(kBlock % 4 == 0);
+  static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float));
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  bounds.resize(block_count(points.size()));
+  if (points.empty()) return;
+  const Eigen::Map<const Eigen::ArrayXf> flat(points.front().data(),
+                                              static_cast<Eigen::Index>(3 * points.size()));
+  for (std::size_t b = 0; b < bounds.size(); ++b) {
+    const std::size_t begin = b * kBlock;
+    const std::size_t count = std::min(kBlock, points.size() - begin);
+    Eigen::Vector3f lo = Eigen::Vector3f::Constant(kInf), hi = Eigen::Vector3f::Constant(-kInf);
+    std::size_t i = 0;
+    if (count >= 4) {
+      Eigen::Array4f lo0 = Eigen::Array4f::Constant(kInf), lo1 = lo0, lo2 = lo0;
+      Eigen::Array4f hi0 = -lo0, hi1 = hi0, hi2 = hi0;
+      for (; i + 4 <= count; i += 4) {
+        const auto j = static_cast<Eigen::Index>(3 * (begin + i));
+        lo0 = lo0.min(flat.segment<4>(j));
+        hi0 = hi0.max(flat.segment<4>(j));
+        lo1 = lo1.min(flat.segment<4>(j + 4));
+        hi1 = hi1.max(flat.segment<4>(j + 4));
+        lo2 = lo2.min(flat.segment<4>(j + 8));
+        hi2 = hi2.max(flat.segment<4>(j + 8));
+      }
+      lo = {std::min({lo0[0], lo0[3], lo1[2], lo2[1]}), std::min({lo0[1], lo1[0], lo1[3], lo2[2]}),
+            std::min({lo0[2], lo1[1], lo2[0], lo2[3]})};
+      hi = {std::max({hi0[0], hi0[3], hi1[2], hi2[1]}), std::max({hi0[1], hi1[0], hi1[3], hi2[2]}),
+            std::max({hi0[2], hi1[1], hi2[0], hi2[3]})};
+    }
+    for (; i < count; ++i) {
+      lo = lo.cwiseMin(points[begin + i]);
+      hi = hi.cwiseMax(points[begin + i]);
+    }
+    if (lo.allFinite() && hi.allFinite()) {
+      bounds[b] = {lo, hi};
+    } else {
+      bounds[b] = {Eigen::Vector3f::Constant(-kInf), Eigen::Vector3f::Constant(kInf)};
+    }
+  }
+}
+
+}  // namespace
+
+void LoggedScan::update_bounds() {
+  compute_block_bounds(points, block_bounds);
+  bounded_points = points.size();
+}
+
 std::size_t LoggedScan::remove_inside(const core::Box3& box) {
+  // Retroactive removal tests the boxes of an object's whole static era (up to
+  // log_delay_scans scans, each with tens of thousands of points); the block bounds cut that
+  // to the few blocks the box meets.
+  const bool bounded =
+      bounded_points == points.size() && block_bounds.size() == block_count(points.size());
   std::size_t n = 0;
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    if (!removed[i] && box.contains(points[i])) {
-      removed[i] = 1;
-      ++n;
+  for (std::size_t b = 0; b < block_count(points.size()); ++b) {
+    if (bounded && !block_bounds[b].intersects(box)) continue;
+    const std::size_t end = std::min(points.size(), (b + 1) * kBlockPoints);
+    for (std::size_t i = b * kBlockPoints; i < end; ++i) {
+      if (!removed[i] && box.contains(points[i])) {
+        removed[i] = 1;
+        ++n;
+      }
     }
   }
   removed_count += n;
@@ -101,6 +173,7 @@ const FilterResult& DynamicObjectFilter::process(
     logged.intensities[n] = intensities[i];
     ++n;
   }
+  logged.update_bounds();
   log_.push_back(std::move(logged));
   LoggedScan& current = log_.back();
 

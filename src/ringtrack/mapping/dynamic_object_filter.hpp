@@ -31,8 +31,18 @@ struct LoggedScan {
   std::vector<float> intensities;
   std::vector<std::uint8_t> removed;  ///< 1 = removed as part of a dynamic object
   std::size_t removed_count{0};
+  /// Bounds of the finite points [kBlockPoints * b, kBlockPoints * (b + 1)): consecutive points
+  /// lie along a ring, so a box meets few blocks (empty when not computed).
+  std::vector<core::Box3> block_bounds;
+  std::size_t bounded_points{0};  ///< points.size() when block_bounds was computed
 
-  /// Marks the points inside box removed; returns how many were newly removed.
+  /// Points per entry of block_bounds.
+  static constexpr std::size_t kBlockPoints = 64;
+  /// Recomputes block_bounds from points (call it after changing points).
+  void update_bounds();
+  /// Marks the points inside box removed; returns how many were newly removed. Skips blocks
+  /// whose bounds miss the box when the bounds were computed for as many points as there are
+  /// now, else tests every point.
   std::size_t remove_inside(const core::Box3& box);
 };
 
