@@ -11,6 +11,8 @@
 #include <filesystem>
 #include <memory>
 #include <set>
+#include <string>
+#include <utility>
 
 #include "commands.hpp"
 #include "output_rows.hpp"
@@ -22,6 +24,8 @@
 #include "ringtrack/io/poses.hpp"
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/sequence.hpp"
+#include "ringtrack/io/text.hpp"
+#include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 
 namespace ringtrack::cli {
@@ -43,6 +47,7 @@ struct RunOptions {
   std::string poses;
   std::string poses_format{"tum"};
   bool filtered_scans{false};
+  bool no_deskew{false};
   bool quiet{false};
   ConfigOptions config;
 };
@@ -84,7 +89,8 @@ class FilteredScanWriter {
  public:
   explicit FilteredScanWriter(fs::path folder) : folder_(std::move(folder)) {}
 
-  /// Keeps the scan (sensor frame) until the filter releases it.
+  /// Keeps the scan as the pipeline processed it (sensor frame at its stamp, motion-compensated
+  /// when deskewed: the points the map was built from) until the filter releases it.
   void hold(std::size_t index, const core::OrganizedScan& scan) {
     pending_.push_back({index, scan, next_sequence_++});
   }
@@ -119,7 +125,21 @@ class FilteredScanWriter {
   std::uint64_t next_sequence_{0};
 };
 
-// Scans with their poses, from a sequence folder / PCD folder or from a sensor recording or stream.
+// Earliest and latest column stamps of a scan (its first and last column in firing order); equal
+// when it has no per-column times (all columns share one stamp, or none are set): then there is
+// no motion within the scan to compensate.
+std::pair<std::int64_t, std::int64_t> column_time_span(const core::OrganizedScan& scan) {
+  const auto& t = scan.column_stamp_ns;
+  if (t.size() != static_cast<std::size_t>(scan.columns()) || t.empty()) {
+    return {scan.stamp_ns, scan.stamp_ns};
+  }
+  const auto [first, last] = std::minmax_element(t.begin(), t.end());
+  return {*first, *last};
+}
+
+// Scans with their poses, from a sequence folder / PCD folder or from a sensor recording or
+// stream, motion-compensated (pipeline::deskew_scan) whenever the sensor's motion is known
+// (docs/inputs.md, "Sensor poses and motion compensation").
 class RunInput {
  public:
   explicit RunInput(const RunOptions& o) {
@@ -133,6 +153,20 @@ class RunInput {
       }
       sequence_ = std::make_unique<io::SequenceReader>(o.input, read_options);
       if (sequence_->size() == 0) throw core::InputError(o.input + ": no scans found");
+      // A plain PCD folder's column times are the reader's guess (the files carry no time, and
+      // such clouds may be motion-compensated by whoever wrote them): nothing to deskew by.
+      if (o.no_deskew) {
+        deskew_off_ = "off (--no-deskew)";
+      } else if (!sequence_->has_poses()) {
+        deskew_off_ = "off (no poses: static sensor)";
+      } else if (!sequence_->is_sequence()) {
+        deskew_off_ = "off (plain PCD folder: its columns carry no times)";
+      } else if (sequence_->size() < 2) {
+        deskew_off_ = "off (one scan: its motion is unknown)";
+      } else {
+        deskew_ = true;
+        deskew_method_ = "poses of this and the next scan";
+      }
       return;
     }
     io::ScanSourceOptions source_options;
@@ -147,15 +181,33 @@ class RunInput {
       }
       trajectory_ = io::read_tum(o.poses);
     }
+    if (o.no_deskew) {
+      deskew_off_ = "off (--no-deskew)";
+    } else if (trajectory_.empty()) {
+      deskew_off_ = "off (no --poses: static sensor)";
+    } else {
+      deskew_ = true;
+      deskew_method_ = "--poses at each scan's first and last column";
+    }
   }
 
-  /// The next scan and its pose; false at the end.
+  /// The next scan (motion-compensated when the sensor's motion is known) and the pose to process
+  /// it with; false at the end.
   bool next(std::size_t& index, core::OrganizedScan& scan, core::Pose& pose) {
     if (sequence_) {
       if (!sequence_->next(item_)) return false;
       index = item_.index;
       scan = std::move(item_.scan);
       pose = item_.pose;
+      ++scans_;
+      const auto [first_ns, last_ns] = column_time_span(scan);
+      if (deskew_ && last_ns > first_ns) {
+        // Motion between this scan's stamp and the next one's; the last scan extrapolates the
+        // motion between the previous scan and itself.
+        const std::size_t a = index + 1 < sequence_->size() ? index : index - 1;
+        pose = pipeline::deskew_scan(scan, sequence_->pose(a), sequence_->pose(a + 1));
+        ++deskewed_;
+      }
       return true;
     }
     auto next_scan = source_->next();
@@ -164,19 +216,42 @@ class RunInput {
     scan = std::move(*next_scan);
     pose = core::Pose{};
     pose.stamp_ns = scan.stamp_ns;
-    if (!trajectory_.empty()) {
-      if (!trajectory_.covers(scan.stamp_ns)) {
-        throw core::InputError("--poses: no pose around scan " + std::to_string(index) +
-                               " at stamp " + std::to_string(scan.stamp_ns) + " ns");
-      }
-      pose = trajectory_.at(scan.stamp_ns);
+    ++scans_;
+    if (trajectory_.empty()) return true;
+    if (!trajectory_.covers(scan.stamp_ns)) {
+      throw core::InputError("--poses: no pose around scan " + std::to_string(index) +
+                             " at stamp " + std::to_string(scan.stamp_ns) + " ns");
     }
+    pose = trajectory_.at(scan.stamp_ns);
+    const auto [first_ns, last_ns] = column_time_span(scan);
+    if (!deskew_ || last_ns <= first_ns) return true;
+    if (!trajectory_.covers(first_ns) || !trajectory_.covers(last_ns)) {
+      throw core::InputError(
+          "--poses: no pose around scan " + std::to_string(index) + "'s columns (" +
+          io::format_stamp(first_ns) + " to " + io::format_stamp(last_ns) + " s; the poses cover " +
+          io::format_stamp(trajectory_.start_ns()) + " to " +
+          io::format_stamp(trajectory_.end_ns()) +
+          " s): motion compensation needs poses over the whole revolution (or give --no-deskew)");
+    }
+    pose = pipeline::deskew_scan(scan, trajectory_.at(first_ns), trajectory_.at(last_ns));
+    ++deskewed_;
     return true;
   }
   /// Number of scans when known in advance (0 for recordings and streams).
   [[nodiscard]] std::size_t size() const { return sequence_ ? sequence_->size() : 0; }
   /// What the source counted (packets, drops, ...), empty for sequence folders.
   [[nodiscard]] std::string summary() const { return source_ ? source_->summary() : std::string(); }
+  /// Whether and how the scans were motion-compensated, for the summary.
+  [[nodiscard]] std::string deskew_summary() const {
+    if (!deskew_) return deskew_off_;
+    std::string out = std::to_string(deskewed_) + " of " + std::to_string(scans_) + " scans (" +
+                      deskew_method_ + ")";
+    if (deskewed_ < scans_) {
+      out +=
+          "; " + std::to_string(scans_ - deskewed_) + " without per-column times left as they are";
+    }
+    return out;
+  }
 
  private:
   static bool is_rosbag2_folder(const std::string& path) {
@@ -188,6 +263,10 @@ class RunInput {
   io::Trajectory trajectory_;
   io::SequenceScan item_;
   std::size_t count_{0};
+  bool deskew_{false};         // compensate scans that have per-column times
+  std::string deskew_method_;  // where the motion comes from (deskew_)
+  std::string deskew_off_;     // why not (!deskew_)
+  std::size_t scans_{0}, deskewed_{0};
 };
 
 void run(const RunOptions& o) {
@@ -260,6 +339,7 @@ void run(const RunOptions& o) {
     std::printf("input            %s\n", summary.c_str());
   std::printf("scans            %zu%s\n", total_ms.size(),
               g_interrupted.load() ? " (interrupted: the outputs cover these scans only)" : "");
+  std::printf("deskew           %s\n", input.deskew_summary().c_str());
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
   std::printf("static map       %zu voxels\n", map_points.size());
   std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", percentile(total_ms, 0.5),
@@ -290,7 +370,11 @@ void register_run(CLI::App& app) {
                   "tum (t x y z qx qy qz qw) or kitti (3x4 per scan)")
       ->check(CLI::IsMember({"tum", "kitti"}));
   cmd->add_flag("--filtered-scans", o->filtered_scans,
-                "also write each scan without its dynamic-object points as filtered/NNNNNN.pcd");
+                "also write each scan (as processed: motion-compensated when deskewed) without its "
+                "dynamic-object points as filtered/NNNNNN.pcd");
+  cmd->add_flag("--no-deskew", o->no_deskew,
+                "do not motion-compensate the scans (by default they are whenever poses give the "
+                "sensor's motion, docs/inputs.md)");
   cmd->add_flag("--quiet", o->quiet, "no progress on stderr");
   o->config.add_to(*cmd);
   cmd->callback([o] { run(*o); });

@@ -102,17 +102,23 @@ TEST_F(BenchmarkCli, WritesReportTimingAndJson) {
 TEST_F(BenchmarkCli, MatchesSimulateRunEval) {
   ASSERT_EQ(result_->exit_code, 0) << result_->err;
   const auto bench = nlohmann::json::parse(result_->out);
-  for (const int k : {0, 2}) {  // the static-sensor cases (the file path does not deskew)
+  // Moving sensor: the benchmark deskews with the simulator's exact poses, `run` with the poses
+  // of the sequence folder (this scan's and the next one's) and its nominal column times.
+  for (const int k : {0, 1, 2, 3}) {
     const auto& c = bench["cases"][static_cast<std::size_t>(k)];
     ASSERT_GT(c["metrics"]["matches"].get<long>(), 0) << "a vacuous comparison";
-    const std::string scenario = std::to_string(c["scenario"].get<int>());
+    const bool moving = c["sensor"] == "moving";
+    const std::string scenario =
+        std::to_string(c["scenario"].get<int>()) + (moving ? "-moving" : "");
     const fs::path seq = *dir_ / ("seq" + scenario);
     const fs::path run = *dir_ / ("run" + scenario);
-    auto r = run_command(kCli + " simulate " + scenario + " --duration 3 --seed 5 --out " +
+    auto r = run_command(kCli + " simulate " + std::to_string(c["scenario"].get<int>()) +
+                         (moving ? " --moving-sensor" : "") + " --duration 3 --seed 5 --out " +
                          seq.string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
     r = run_command(kCli + " run " + seq.string() + " --quiet --out " + run.string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_NE(r.out.find("deskew           30 of 30 scans"), std::string::npos) << r.out;
     r = run_command(kCli + " eval --json --gt " + seq.string() + " --tracks " +
                     (run / "tracks.csv").string());
     ASSERT_EQ(r.exit_code, 0) << r.err;
