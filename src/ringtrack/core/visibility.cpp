@@ -181,13 +181,18 @@ VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& m
   cos_az_.resize(nc);
   sin_az_.resize(nc);
   std::vector<std::pair<double, int>> order(nc);
+  std::size_t smallest = 0;
   for (std::size_t c = 0; c < nc; ++c) {
     const double az = scan.column_azimuth_rad[c];
     cos_az_[c] = std::cos(az);
     sin_az_[c] = std::sin(az);
     order[c] = {wrap_two_pi(az), static_cast<int>(c)};
+    if (order[c] < order[smallest]) smallest = c;
   }
-  std::sort(order.begin(), order.end());
+  // A capture's azimuths ascend modulo 2 pi: starting at the smallest they are usually sorted
+  // already, which saves the sort.
+  std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(smallest), order.end());
+  if (!std::is_sorted(order.begin(), order.end())) std::sort(order.begin(), order.end());
   sorted_az_.resize(nc);
   sorted_column_.resize(nc);
   for (std::size_t i = 0; i < nc; ++i) {
@@ -209,10 +214,11 @@ VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& m
   }
   const std::size_t buckets = 4 * nc;
   bucket_.resize(buckets);
+  std::size_t first = 0;  // lower bound of each bucket's start, found by one merge-like pass
   for (std::size_t b = 0; b < buckets; ++b) {
     const double start = kTwoPi * static_cast<double>(b) / static_cast<double>(buckets);
-    bucket_[b] = static_cast<int>(std::lower_bound(sorted_az_.begin(), sorted_az_.end(), start) -
-                                  sorted_az_.begin());
+    while (first < nc && sorted_az_[first] < start) ++first;
+    bucket_[b] = static_cast<int>(first);
   }
 }
 
