@@ -81,16 +81,29 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
   }
   const auto& status = scan.statuses();
   const auto& range = scan.ranges();
+  // Bin of each column; two columns of one scan in one bin (a revolution of 1809 firing
+  // sequences): the first wins, the other is skipped (-1).
+  column_bin_.resize(static_cast<std::size_t>(scan.columns()));
   for (int c = 0; c < scan.columns(); ++c) {
     const double az = scan.column_azimuth_rad[static_cast<std::size_t>(c)];
-    if (!std::isfinite(az)) continue;
-    const auto bin = static_cast<std::size_t>(bin_of(az));
-    // Two columns of one scan in one bin (a revolution of 1809 firing sequences): the first wins.
-    if (bin_scan_[bin] == scans_) continue;
-    bin_scan_[bin] = scans_;
-    for (int r = 0; r < rings_; ++r) {
+    int bin = -1;
+    if (std::isfinite(az)) {
+      bin = bin_of(az);
+      if (bin_scan_[static_cast<std::size_t>(bin)] == scans_) {
+        bin = -1;
+      } else {
+        bin_scan_[static_cast<std::size_t>(bin)] = scans_;
+      }
+    }
+    column_bin_[static_cast<std::size_t>(c)] = bin;
+  }
+  for (int r = 0; r < rings_; ++r) {
+    const std::size_t row = static_cast<std::size_t>(r) * static_cast<std::size_t>(bins_);
+    for (int c = 0; c < scan.columns(); ++c) {
+      const int bin = column_bin_[static_cast<std::size_t>(c)];
+      if (bin < 0) continue;
       const auto i = scan.index(r, c);
-      const std::size_t cell = static_cast<std::size_t>(r) * static_cast<std::size_t>(bins_) + bin;
+      const std::size_t cell = row + static_cast<std::size_t>(bin);
       switch (status[i]) {
         case ReturnStatus::kValid:
           observe(cell, range[i]);

@@ -76,6 +76,7 @@ class BackgroundRangeModel {
   std::vector<float> candidate_;   // mean of the current streak of consistent ranges
   std::vector<std::uint16_t> streak_;
   std::vector<std::int64_t> bin_scan_;  // last scan that wrote each bin (one column per bin)
+  std::vector<int> column_bin_;         // scratch: bin of each column of the current scan
 };
 
 }  // namespace ringtrack::core
