@@ -36,7 +36,7 @@ void BM_PipelineScan(benchmark::State& state) {
   for (auto _ : state) {
     if (next == kScans) {  // start over with a fresh pipeline, warmed up outside the timing
       state.PauseTiming();
-      pipeline = std::make_unique<pipeline::Pipeline>(core::Config{});
+      pipeline = std::make_unique<pipeline::Pipeline>(core::Config{}, core::SensorModel::vlp16());
       for (next = 0; next < kWarmUp; ++next) pipeline->process(data[next].scan, data[next].pose);
       state.ResumeTiming();
     }

@@ -41,7 +41,7 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
   out.moving = scenario.sensor.motion != sim::SensorMotion::kStatic;
 
   sim::Simulator simulator(scenario, options.seed);
-  pipeline::Pipeline pipeline(config);
+  pipeline::Pipeline pipeline(config, simulator.model());
   const std::int64_t n = simulator.scan_count();
   out.scans = n;
 

@@ -237,6 +237,10 @@ class RunInput {
     ++deskewed_;
     return true;
   }
+  /// The sensor that took the scans (for recordings known once the first scan was read).
+  [[nodiscard]] const core::SensorModel& sensor_model() const {
+    return sequence_ ? sequence_->sensor() : source_->model();
+  }
   /// Number of scans when known in advance (0 for recordings and streams).
   [[nodiscard]] std::size_t size() const { return sequence_ ? sequence_->size() : 0; }
   /// What the source counted (packets, drops, ...), empty for sequence folders.
@@ -284,7 +288,8 @@ void run(const RunOptions& o) {
     config_file.close();
   }
 
-  pipeline::Pipeline pipeline(config);
+  // Built at the first scan: a recording's sensor model is known once it was decoded.
+  std::unique_ptr<pipeline::Pipeline> pipeline;
   std::unique_ptr<FilteredScanWriter> filtered;
   if (o.filtered_scans) filtered = std::make_unique<FilteredScanWriter>(out / "filtered");
   io::TracksCsvWriter tracks(out / "tracks.csv");
@@ -300,7 +305,8 @@ void run(const RunOptions& o) {
   g_interrupted.store(false);
   const auto previous_handler = std::signal(SIGINT, on_interrupt);
   while (!g_interrupted.load() && input.next(index, scan, pose)) {
-    const auto& result = pipeline.process(scan, pose);
+    if (!pipeline) pipeline = std::make_unique<pipeline::Pipeline>(config, input.sensor_model());
+    const auto& result = pipeline->process(scan, pose);
     rows.clear();
     for (const auto& h : result.hypotheses) {
       rows.push_back(track_row(index, scan.stamp_ns, h));
@@ -312,19 +318,19 @@ void run(const RunOptions& o) {
     total_ms.push_back(result.times.total_ms);
     if (filtered) {
       filtered->hold(index, scan);
-      filtered->write_released(pipeline.dynamic_filter());
+      filtered->write_released(pipeline->dynamic_filter());
     }
     if (progress) print_progress(index + 1, input.size(), start);
   }
   std::signal(SIGINT, previous_handler);
   if (total_ms.empty()) throw core::InputError(o.input + ": no scans found");
   if (progress) std::fprintf(stderr, "\n");
-  pipeline.finish();
-  if (filtered) filtered->write_released(pipeline.dynamic_filter());
+  pipeline->finish();
+  if (filtered) filtered->write_released(pipeline->dynamic_filter());
   tracks.close();
   timing.close();
 
-  const auto map_points = pipeline.static_map().points();
+  const auto map_points = pipeline->static_map().points();
   std::vector<Eigen::Vector3f> xyz;
   std::vector<float> intensity;
   xyz.reserve(map_points.size());

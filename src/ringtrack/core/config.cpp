@@ -247,6 +247,34 @@ class Schema {
             "a dynamic hypothesis whose reported speed stays zero this many scans is static again "
             "(ever_dynamic stays set); 0 = dynamic forever");
 
+    choice("dynamic_test", t.dynamic_test,
+           {{"free_space", DynamicTest::kFreeSpace}, {"box", DynamicTest::kBox}},
+           "what turns a hypothesis dynamic: free_space = the scan sees through points the object "
+           "occupied where it was anchored (occlusion and a moving viewpoint never do that); box "
+           "= its footprint left the anchor footprint (the paper's test; also used without a "
+           "scan)");
+    number("free_space_margin_m", t.free_space_margin_m, 0.0, 100.0,
+           "a beam ending more than this beyond a point sees the point free (m)");
+    number("free_space_lateral_m", t.free_space_lateral_m, 0.0, 100.0,
+           "a beam decides about a point only if it passes this close to it (m)");
+    number("free_space_min_share", t.free_space_min_share, 0.0, 1.0,
+           "free_space: share of the anchor's decided points (free or occupied) that must be "
+           "seen free");
+    integer("free_space_confirm_scans", t.free_space_confirm_scans, 1, 1000000,
+            "free_space: consecutive scans with a detection in which the evidence must hold");
+    number("free_space_min_distance_m", t.free_space_min_distance_m, 0.0, 100.0,
+           "free_space: the measured centre must also be this far from the anchor (m)");
+    number("free_space_max_viewpoint_shift_m", t.free_space_max_viewpoint_shift_m, 0.0, 1e6,
+           "free_space: used while the sensor is within this distance of where it saw the "
+           "anchor (m); beyond, beams pass beside the remembered points and the box test "
+           "decides (a moving sensor)");
+    integer("occluded_coast_scans", t.occluded_coast_scans, 0, 1000000,
+            "a hypothesis whose predicted points are occluded (something in front) is kept this "
+            "many missed scans even when its covariance would delete it");
+    integer("free_delete_scans", t.free_delete_scans, 0, 1000000,
+            "a hypothesis missed in this many consecutive scans that see through its predicted "
+            "points is deleted (0 = never)");
+
     auto& m = c.mapping;
     section_ = "mapping";
     integer("log_delay_scans", m.log_delay_scans, 0, 100000,

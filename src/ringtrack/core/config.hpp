@@ -54,6 +54,12 @@ enum class AssociationCost {
 };
 
 /// How a hypothesis' height evolves.
+/// What turns a static hypothesis dynamic (docs/tracking.md, "Static and dynamic").
+enum class DynamicTest {
+  kFreeSpace,  ///< the scan sees through space the object occupied where it was anchored
+  kBox,        ///< its footprint leaves the anchor footprint (the paper's box test, refined)
+};
+
 enum class VerticalMotion {
   kConstantPosition,  ///< vertical velocity held at zero: walkers and ground robots
   kConstantVelocity,  ///< like the horizontal axes: flying objects
@@ -82,6 +88,17 @@ struct TrackingConfig {
   double dynamic_min_distance_m{1.0};  // besides disjoint footprints, the centre must move this far
   int dynamic_confirm_scans{5};        // ... in this many consecutive strict detections
   int rest_scans_to_static{30};  // dynamic hypotheses at rest this long turn static (0 = never)
+  DynamicTest dynamic_test{DynamicTest::kFreeSpace};  // free_space needs the scan (Pipeline)
+  double free_space_margin_m{0.3};        // a beam ending this far beyond a point sees it free
+  double free_space_lateral_m{0.15};      // ... if it passes this close to the point
+  double free_space_min_share{0.6};       // share of the remembered points seen free (of decided)
+  int free_space_confirm_scans{2};        // consecutive scans the free-space evidence must hold
+  double free_space_min_distance_m{0.5};  // and the measured centre moved this far (m)
+  double free_space_max_viewpoint_shift_m{0.1};  // farther from the anchor's viewpoint: box test
+  int occluded_coast_scans{30};  // a hypothesis whose predicted points are occluded coasts this
+                                 // many missed scans before the covariance test may delete it
+  int free_delete_scans{2};  // missed in this many consecutive scans seeing through its predicted
+                             // points: deleted
 };
 
 /// Dynamic-object filter and static map (paper III.E).

@@ -317,6 +317,18 @@ Visibility VisibilityQuery::at(const Eigen::Vector3d& world_point, double margin
   return classify(scan_->status(i), scan_->range_m(i), loc->distance_m, loc->distance_m, margin_m);
 }
 
+PointProbe VisibilityQuery::probe(const Eigen::Vector3d& world_point, double margin_m) const {
+  check_margin(margin_m);
+  const auto loc = locate(world_point);
+  if (!loc) return {};
+  const auto i = scan_->index(loc->ring, loc->column);
+  const BeamRay ray = cell_ray(loc->ring, loc->column);
+  const Eigen::Vector3d v = world_point - ray.origin;
+  const double lateral = (v - v.dot(ray.direction) * ray.direction).norm();
+  return {classify(scan_->status(i), scan_->range_m(i), loc->distance_m, loc->distance_m, margin_m),
+          lateral};
+}
+
 BeamRay VisibilityQuery::cell_ray(int ring, int column) const {
   const auto r = static_cast<std::size_t>(ring);
   const auto c = static_cast<std::size_t>(column);

@@ -55,6 +55,12 @@ struct BoxBeam {
   double exit_m{0.0};                           ///< distance from the beam origin to the box exit
 };
 
+/// A point's verdict with how far the deciding beam passes from the point.
+struct PointProbe {
+  Visibility visibility{Visibility::kUnknown};  ///< as VisibilityQuery::at
+  double lateral_m{0.0};  ///< distance from the point to the deciding beam (0 when unknown)
+};
+
 /// Answers visibility questions about world points and boxes from one organized scan taken at a
 /// pose (sensor in world). Holds a reference to the scan, which must outlive the query.
 /// Construction is O(columns log columns); queries do not allocate (except cells_in_box's output).
@@ -66,6 +72,14 @@ class VisibilityQuery {
 
   /// Verdict of the scan about one world point; margin_m >= 0 is the range tolerance in metres.
   [[nodiscard]] Visibility at(const Eigen::Vector3d& world_point, double margin_m) const;
+  /// Like at(), with the distance between the point and the beam that decided: a beam that
+  /// passes a metre beside a point says little about it (a moving sensor's rings fall between
+  /// the heights an earlier scan saw).
+  [[nodiscard]] PointProbe probe(const Eigen::Vector3d& world_point, double margin_m) const;
+  /// A valid cell's point in the world frame.
+  [[nodiscard]] Eigen::Vector3d world_point(std::size_t cell) const {
+    return world_R_sensor_ * scan_->point(cell).cast<double>() + world_t_sensor_;
+  }
   /// The cell whose beam passes closest to the point (nearest ring elevation, nearest column
   /// azimuth), or nothing when the point lies outside the field of view.
   [[nodiscard]] std::optional<std::size_t> cell_of(const Eigen::Vector3d& world_point) const;
@@ -87,6 +101,8 @@ class VisibilityQuery {
   /// Median spacing of the column azimuths (radians), the nominal column step.
   [[nodiscard]] double nominal_column_step_rad() const { return nominal_step_rad_; }
 
+  /// The sensor's position in the world (the pose's translation).
+  [[nodiscard]] const Eigen::Vector3d& sensor_position() const { return world_t_sensor_; }
   /// The scan this query answers from.
   [[nodiscard]] const OrganizedScan& scan() const { return *scan_; }
 

@@ -1,6 +1,7 @@
 #include "ringtrack/pipeline/pipeline.hpp"
 
 #include <chrono>
+#include <utility>
 
 #include "ringtrack/core/error.hpp"
 
@@ -15,13 +16,15 @@ double elapsed_ms(Clock::time_point from, Clock::time_point to) {
 
 }  // namespace
 
-Pipeline::Pipeline(const core::Config& config)
+Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
     : config_(config),
+      model_(std::move(model)),
       segmenter_(config.segmentation),
       detector_(config.detection),
       tracker_(config.tracking),
       filter_(config.mapping) {
   core::validate_config(config);
+  model_.validate();
 }
 
 const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core::Pose& pose) {
@@ -38,7 +41,9 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   const auto predictions = tracker_.predicted_positions(scan.stamp_ns);
   const auto& detections = detector_.detect(scan, labels_, pose, predictions);
   const auto t2 = Clock::now();
-  const auto& hypotheses = tracker_.update(detections, scan.stamp_ns);
+  // What this scan sees of the space hypotheses occupied (free-space tests; docs/visibility.md).
+  const core::VisibilityQuery visibility(scan, model_, pose);
+  const auto& hypotheses = tracker_.update(detections, scan.stamp_ns, &visibility);
   const auto t3 = Clock::now();
   const auto& filtered = filter_.process(scan, pose, detections, hypotheses);
   const auto t4 = Clock::now();

@@ -40,7 +40,8 @@ struct FrameResult {
 /// Runs the stages in order on each scan; one instance per sensor stream.
 class Pipeline {
  public:
-  explicit Pipeline(const core::Config& config);
+  /// The model is the sensor's that took the scans: the free-space tests follow its beams.
+  Pipeline(const core::Config& config, core::SensorModel model);
 
   /// Processes one scan taken at `pose` (sensor in world); scans must come in time order.
   const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& pose);
@@ -53,9 +54,11 @@ class Pipeline {
   [[nodiscard]] const mapping::DynamicObjectFilter& dynamic_filter() const { return filter_; }
   [[nodiscard]] const core::Config& config() const { return config_; }
   [[nodiscard]] const tracking::Tracker& tracker() const { return tracker_; }
+  [[nodiscard]] const core::SensorModel& sensor_model() const { return model_; }
 
  private:
   core::Config config_;
+  core::SensorModel model_;
   segmentation::Segmenter segmenter_;
   detection::Detector detector_;
   tracking::Tracker tracker_;

@@ -19,6 +19,41 @@ constexpr double kKmhToMps = 1.0 / 3.6;
 // plane (one ring, one column) would otherwise have a singular covariance.
 constexpr double kMinMeasurementVariance = 0.01 * 0.01;
 constexpr double kInf = std::numeric_limits<double>::infinity();
+// Points a hypothesis remembers of a detection for the free-space tests: enough to outvote a
+// few edge beams, few enough that probing costs microseconds.
+constexpr std::size_t kRememberedPoints = 16;
+
+// What one scan says about a set of remembered points.
+struct PointVotes {
+  int free{0};      // the beam ends beyond the point (or returns nothing: sky)
+  int occupied{0};  // the beam ends at the point
+  int occluded{0};  // the beam ends before the point
+  [[nodiscard]] int decided() const { return free + occupied; }
+};
+
+PointVotes probe_points(const core::VisibilityQuery& query, const core::TrackingConfig& config,
+                        const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& shift) {
+  PointVotes votes;
+  for (const auto& p : points) {
+    const auto probe = query.probe(p.cast<double>() + shift, config.free_space_margin_m);
+    if (probe.lateral_m > config.free_space_lateral_m) continue;
+    switch (probe.visibility) {
+      case core::Visibility::kFree:
+      case core::Visibility::kNoReturn:
+        ++votes.free;
+        break;
+      case core::Visibility::kOccupied:
+        ++votes.occupied;
+        break;
+      case core::Visibility::kOccluded:
+        ++votes.occluded;
+        break;
+      case core::Visibility::kUnknown:
+        break;
+    }
+  }
+  return votes;
+}
 
 double max_eigenvalue(const Eigen::Matrix3d& m) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
@@ -150,7 +185,8 @@ std::vector<Eigen::Vector3f> Tracker::predicted_positions(std::int64_t stamp_ns)
 }
 
 const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection>& detections,
-                                               std::int64_t stamp_ns) {
+                                               std::int64_t stamp_ns,
+                                               const core::VisibilityQuery* visibility) {
   if (started_ && stamp_ns < stamp_ns_) {
     throw core::InputError("tracking: scan stamp " + std::to_string(stamp_ns) +
                            " ns precedes the previous scan's " + std::to_string(stamp_ns_) + " ns");
@@ -166,6 +202,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
   started_ = true;
   stamp_ns_ = stamp_ns;
   stats_ = {};
+  visibility_ = visibility;
 
   measurement_r_.clear();
   update_r_.clear();
@@ -180,6 +217,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
     const int d = col_of_row_[i];
     if (d == kUnassigned) {
       coast(hypotheses_[i]);
+      look_for_missed(hypotheses_[i]);
     } else {
       correct(hypotheses_[i], detections[d], d);
       detection_used_[d] = 1;
@@ -200,6 +238,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
     report_velocity(h);
     classify(h);
   }
+  visibility_ = nullptr;  // the scan may not outlive this call
   return hypotheses_;
 }
 
@@ -250,10 +289,45 @@ void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
   h.points = d.indices.size();
   h.detection = index;
   h.last_detection = {d.centroid, d.covariance, d.box, d.indices.size(), d.relaxed, stamp_ns_};
+  ++h.hits;
+  h.occluded = false;
+  h.seen_through_scans = 0;
+  remember_points(h, d);
 }
 
 void Tracker::coast(Hypothesis& h) {
   ++h.missed_scans;
+}
+
+void Tracker::remember_points(Hypothesis& h, const core::Detection& d) const {
+  h.last_points.clear();
+  if (visibility_ == nullptr || d.indices.empty()) return;
+  // An even sample over the detection's cells (ascending: ring by ring), so every ring that hit
+  // the object is represented.
+  const std::size_t n = d.indices.size();
+  const std::size_t k = std::min(n, kRememberedPoints);
+  for (std::size_t s = 0; s < k; ++s) {
+    const std::size_t cell = d.indices[s * n / k];
+    h.last_points.push_back(visibility_->world_point(cell).cast<float>());
+  }
+}
+
+void Tracker::look_for_missed(Hypothesis& h) const {
+  h.occluded = false;
+  if (visibility_ == nullptr || h.last_points.empty()) {
+    h.seen_through_scans = 0;
+    return;
+  }
+  // Where the object's points would be now if it moved as predicted.
+  const Eigen::Vector3d shift = h.position() - h.last_detection.centroid.cast<double>();
+  const PointVotes votes = probe_points(*visibility_, config_, h.last_points, shift);
+  const int seen = votes.free + votes.occupied + votes.occluded;
+  // Something in front of most of its points: it is hidden, not gone.
+  h.occluded = seen > 0 && 2 * votes.occluded > seen;
+  // The scan looks through nearly all of them and nothing there was detected: it is gone (or
+  // the prediction is wrong, which a fresh hypothesis repairs).
+  const bool seen_through = votes.free >= 2 && votes.free >= seen - 1;
+  h.seen_through_scans = seen_through ? h.seen_through_scans + 1 : 0;
 }
 
 void Tracker::create(const core::Detection& d, int index) {
@@ -270,6 +344,10 @@ void Tracker::create(const core::Detection& d, int index) {
   h.points = d.indices.size();
   h.detection = index;
   h.last_detection = {d.centroid, d.covariance, d.box, d.indices.size(), d.relaxed, stamp_ns_};
+  h.hits = 1;
+  remember_points(h, d);
+  h.anchor_points = h.last_points;
+  if (visibility_ != nullptr) h.anchor_viewpoint = visibility_->sensor_position();
   hypotheses_.push_back(std::move(h));
   ++stats_.created;
 }
@@ -277,9 +355,16 @@ void Tracker::create(const core::Detection& d, int index) {
 void Tracker::delete_uncertain() {
   const auto before = hypotheses_.size();
   std::erase_if(hypotheses_, [&](const Hypothesis& h) {
+    if (config_.free_delete_scans > 0 && h.seen_through_scans >= config_.free_delete_scans) {
+      ++stats_.deleted_seen_through;
+      return true;
+    }
+    // A hidden object is still there: keep it while the occlusion lasts (bounded).
+    if (h.occluded && h.missed_scans <= config_.occluded_coast_scans) return false;
     return deletion_eigenvalue(config_, h.position_covariance()) > config_.delete_eigenvalue_m2;
   });
-  stats_.deleted_uncertain = static_cast<int>(before - hypotheses_.size());
+  stats_.deleted_uncertain =
+      static_cast<int>(before - hypotheses_.size()) - stats_.deleted_seen_through;
 }
 
 void Tracker::delete_merged() {
@@ -326,23 +411,17 @@ void Tracker::report_velocity(Hypothesis& h) const {
 void Tracker::classify(Hypothesis& h) const {
   if (h.detection < 0) return;  // only a measured box is evidence either way
   if (!h.dynamic) {
-    // Measured evidence only: the filter's position drifts while coasting on a spurious
-    // velocity, and a relaxed detection may be any clutter near the prediction, so neither can
-    // make a static object (fence post, wall edge) dynamic.
-    // Clutter's clusters jump back and forth, a walker keeps going: the displacement must hold
-    // in dynamic_confirm_scans consecutive measured scans.
-    if (h.last_detection.relaxed) return;
-    const double moved =
-        (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
-    if (!footprints_intersect(h.box, h.anchor_box) && moved > config_.dynamic_min_distance_m) {
-      ++h.moved_scans;
+    // Free space is exact evidence only from the viewpoint the anchor was seen from: then every
+    // remembered point is probed by the very beam that measured it. From elsewhere, beams pass
+    // beside the points, and those grazing an edge of static clutter see past it (measured:
+    // more clutter turned dynamic with a moving sensor, docs/tracking.md).
+    if (config_.dynamic_test == core::DynamicTest::kFreeSpace && visibility_ != nullptr &&
+        !h.anchor_points.empty() &&
+        (visibility_->sensor_position() - h.anchor_viewpoint).norm() <=
+            config_.free_space_max_viewpoint_shift_m) {
+      classify_by_free_space(h);
     } else {
-      h.moved_scans = 0;
-    }
-    if (h.moved_scans >= config_.dynamic_confirm_scans) {
-      h.dynamic = h.ever_dynamic = true;
-      h.rest_scans = 0;
-      h.moved_scans = 0;
+      classify_by_box(h);
     }
     return;
   }
@@ -351,7 +430,49 @@ void Tracker::classify(Hypothesis& h) const {
     h.dynamic = false;
     h.anchor_box = h.box;
     h.anchor_position = h.last_detection.centroid.cast<double>();
+    h.anchor_points = h.last_points;
+    if (visibility_ != nullptr) h.anchor_viewpoint = visibility_->sensor_position();
     h.rest_scans = 0;
+  }
+}
+
+void Tracker::classify_by_free_space(Hypothesis& h) const {
+  // The object stood at its anchor; if the scan now sees through most of the points it occupied
+  // there while the object is measured elsewhere, it has left. Occlusion hides those points
+  // (occluded), a moving viewpoint sees them from another side (occupied or occluded): neither
+  // makes them free, so static clutter stays static however its cluster changes shape.
+  const double moved =
+      (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
+  const PointVotes votes =
+      probe_points(*visibility_, config_, h.anchor_points, Eigen::Vector3d::Zero());
+  const bool left = moved > config_.free_space_min_distance_m && votes.free >= 2 &&
+                    votes.free >= config_.free_space_min_share * votes.decided();
+  h.moved_scans = left ? h.moved_scans + 1 : 0;
+  if (h.moved_scans >= config_.free_space_confirm_scans) {
+    h.dynamic = h.ever_dynamic = true;
+    h.rest_scans = 0;
+    h.moved_scans = 0;
+  }
+}
+
+void Tracker::classify_by_box(Hypothesis& h) const {
+  // Measured evidence only: the filter's position drifts while coasting on a spurious
+  // velocity, and a relaxed detection may be any clutter near the prediction, so neither can
+  // make a static object (fence post, wall edge) dynamic.
+  // Clutter's clusters jump back and forth, a walker keeps going: the displacement must hold
+  // in dynamic_confirm_scans consecutive measured scans.
+  if (h.last_detection.relaxed) return;
+  const double moved =
+      (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
+  if (!footprints_intersect(h.box, h.anchor_box) && moved > config_.dynamic_min_distance_m) {
+    ++h.box_moved_scans;
+  } else {
+    h.box_moved_scans = 0;
+  }
+  if (h.box_moved_scans >= config_.dynamic_confirm_scans) {
+    h.dynamic = h.ever_dynamic = true;
+    h.rest_scans = 0;
+    h.moved_scans = 0;
   }
 }
 

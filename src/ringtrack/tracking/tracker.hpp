@@ -9,6 +9,7 @@
 #include "ringtrack/core/box3.hpp"
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/core/detection.hpp"
+#include "ringtrack/core/visibility.hpp"
 #include "ringtrack/tracking/association_cost.hpp"
 #include "ringtrack/tracking/kalman.hpp"
 
@@ -35,14 +36,21 @@ struct Hypothesis {
   core::Box3 anchor_box;   ///< box the static/dynamic test compares with (initial, or where a
                            ///< dynamic hypothesis came to rest)
   Eigen::Vector3d anchor_position{Eigen::Vector3d::Zero()};  ///< position when anchored
-  bool dynamic{false};              ///< moving away from its anchor (see docs/tracking.md)
-  bool ever_dynamic{false};         ///< has been dynamic at least once
-  int age_scans{0};                 ///< scans since creation, 1 in the creating scan
-  int missed_scans{0};              ///< consecutive scans without an assigned detection
-  int rest_scans{0};                ///< consecutive scans with reported speed zero
-  int moved_scans{0};               ///< consecutive measured scans away from the anchor
-  std::size_t points{0};            ///< points of the assigned detection this scan, 0 when missed
-  int detection{-1};                ///< index of the detection assigned this scan, -1 when none
+  bool dynamic{false};       ///< moving away from its anchor (see docs/tracking.md)
+  bool ever_dynamic{false};  ///< has been dynamic at least once
+  int age_scans{0};          ///< scans since creation, 1 in the creating scan
+  int missed_scans{0};       ///< consecutive scans without an assigned detection
+  int rest_scans{0};         ///< consecutive scans with reported speed zero
+  int moved_scans{0};        ///< consecutive measured scans away from the anchor
+  int box_moved_scans{0};    ///< consecutive measured scans the box test held in
+  int hits{0};               ///< scans with an assigned detection, the creating one included
+  std::vector<Eigen::Vector3f> anchor_points;  ///< sample of the anchor detection's world points
+  std::vector<Eigen::Vector3f> last_points;    ///< sample of the last detection's world points
+  Eigen::Vector3d anchor_viewpoint{Eigen::Vector3d::Zero()};  ///< sensor position when anchored
+  bool occluded{false};       ///< missed, and the scan saw something in front of its prediction
+  int seen_through_scans{0};  ///< consecutive missed scans that saw through its predicted points
+  std::size_t points{0};      ///< points of the assigned detection this scan, 0 when missed
+  int detection{-1};          ///< index of the detection assigned this scan, -1 when none
   DetectionSummary last_detection;  ///< the most recent assigned detection
 
   /// Position estimate (world, m).
@@ -53,11 +61,12 @@ struct Hypothesis {
 
 /// Counters of the last update, for logs and tests.
 struct TrackerStats {
-  int assigned{0};            ///< detections paired with hypotheses
-  int created{0};             ///< new hypotheses
-  int deleted_uncertain{0};   ///< deleted for a too large position covariance
-  int deleted_merged{0};      ///< younger hypotheses deleted near older ones
-  int relaxed_unassigned{0};  ///< relaxed detections that paired with nothing (no new track)
+  int assigned{0};              ///< detections paired with hypotheses
+  int created{0};               ///< new hypotheses
+  int deleted_uncertain{0};     ///< deleted for a too large position covariance
+  int deleted_merged{0};        ///< younger hypotheses deleted near older ones
+  int deleted_seen_through{0};  ///< missed hypotheses whose predicted points the scan saw through
+  int relaxed_unassigned{0};    ///< relaxed detections that paired with nothing (no new track)
 };
 
 /// Tracks objects from the detections of successive scans.
@@ -70,8 +79,12 @@ class Tracker {
   /// creates, deletes and classifies hypotheses. Stamps must not decrease (throws
   /// core::InputError); the first call or an equal stamp predicts nothing. Throws
   /// core::InputError for a detection with a non-finite centroid or covariance.
+  /// `visibility` is the query of the scan the detections come from (their indices are its
+  /// cells); with it the free-space rules apply (dynamic test, occluded coasting, deletion of
+  /// hypotheses seen through), without it the box test decides and hypotheses coast blindly.
   const std::vector<Hypothesis>& update(const std::vector<core::Detection>& detections,
-                                        std::int64_t stamp_ns);
+                                        std::int64_t stamp_ns,
+                                        const core::VisibilityQuery* visibility = nullptr);
 
   /// Current hypotheses, oldest first; Hypothesis::detection indexes the last update's input.
   [[nodiscard]] const std::vector<Hypothesis>& hypotheses() const { return hypotheses_; }
@@ -107,6 +120,10 @@ class Tracker {
   void delete_uncertain();
   void delete_merged();
   void classify(Hypothesis& h) const;
+  void classify_by_box(Hypothesis& h) const;
+  void classify_by_free_space(Hypothesis& h) const;
+  void remember_points(Hypothesis& h, const core::Detection& d) const;
+  void look_for_missed(Hypothesis& h) const;
   void report_velocity(Hypothesis& h) const;
 
   core::TrackingConfig config_;
@@ -122,6 +139,7 @@ class Tracker {
   std::uint64_t next_id_{1};
   std::int64_t stamp_ns_{0};
   bool started_{false};
+  const core::VisibilityQuery* visibility_{nullptr};  // of the scan being updated, may be null
   TrackerStats stats_;
 };
 

@@ -149,6 +149,27 @@ TEST(Visibility, WallAtTenMetresFreeOccupiedOccluded) {
   EXPECT_STREQ(to_string(Visibility::kOccluded), "occluded");
 }
 
+TEST(Visibility, ProbeGivesTheBeamsLateralDistance) {
+  const auto m = SensorModel::generic({-10, -5, 0, 5, 10}, 360);
+  const auto scan = wall_scan(m, 10.0f);
+  const Pose pose = make_pose({1, 2, 0.5}, {0, 0, 1}, 0.4);
+  const VisibilityQuery q(scan, m, pose);
+  const auto world = [&](const Eigen::Vector3d& p) { return pose.isometry() * p; };
+  // On a beam: no lateral offset, the verdict of at().
+  const auto on = q.probe(world(beam_point(m, 2, 37 * kDeg, 5.0)), 0.3);
+  EXPECT_EQ(on.visibility, Visibility::kFree);
+  EXPECT_NEAR(on.lateral_m, 0.0, 1e-5);
+  // 2 degrees above ring 2 (elevation 0) at 5 m: the nearest beam (ring 2) passes
+  // 5 sin(2 deg) = 0.1745 m below the point.
+  const auto off = q.probe(world(exact_point(m, 2, 37 * kDeg, 2 * kDeg, 5.0)), 0.3);
+  EXPECT_EQ(off.visibility, Visibility::kFree);
+  EXPECT_NEAR(off.lateral_m, 5.0 * std::sin(2 * kDeg), 1e-4);
+  // The world point of a cell is the scan's point moved by the pose.
+  const auto i = scan.index(3, 100);
+  EXPECT_NEAR((q.world_point(i) - world(scan.point(i).cast<double>())).norm(), 0.0, 1e-6);
+  EXPECT_EQ(q.probe(world(Eigen::Vector3d(0, 0, 20)), 0.3).visibility, Visibility::kUnknown);
+}
+
 TEST(Visibility, AboveTopAndBelowBottomRingAreUnknown) {
   const auto m = SensorModel::vlp16();
   const auto scan = wall_scan(m, 10.0f);
