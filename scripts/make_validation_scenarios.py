@@ -26,6 +26,7 @@ SAMPLE_S = 0.5  # waypoint spacing written to the CSV
 FINE_S = 0.1  # internal time step for formation and conflict checks
 BODY_MARGIN_M = 0.45  # obstacle clearance of path centre lines (the simulator demands 0.2)
 MIN_GAP_M = 0.6  # between people of different groups
+MAX_SPEED_MPS = 1.6  # walkers: 0.8-1.6 m/s
 FLIGHT_BOX = (4.7, 2.7)  # half sizes of the figure-8 area about the sensor, kept free of people
 
 
@@ -286,7 +287,7 @@ def walk(route, speed, t0, rng, radius=2.0, from_stand=True, to_stand=True):
         samples.append((round(t, 3), *point_at(path, cum, s, j)))
         if s >= total - 1e-9:
             break
-        want = speed * (1.0 + 0.05 * math.sin(phase + 0.6 * (t - t0)))
+        want = min(MAX_SPEED_MPS, speed * (1.0 + 0.05 * math.sin(phase + 0.6 * (t - t0))))
         if to_stand:
             want = min(want, math.sqrt(2 * accel * max(total - s, 0.0)) + 0.05)
         v = min(want, v + accel * FINE_S) if v < want else max(want, v - 2 * accel * FINE_S)

@@ -473,6 +473,31 @@ std::vector<ScriptedActor> parse_trajectories_csv(std::string_view text,
   return out;
 }
 
+std::string format_trajectories_csv(const std::vector<ScriptedActor>& actors) {
+  std::ostringstream out;
+  out.precision(17);  // exact round trip
+  out << "t,id,class,x,y,z,height_m,width_m,reflectivity\n";
+  const auto optional = [&](const std::optional<double>& v) {
+    if (v) out << *v;
+  };
+  for (const ScriptedActor& a : actors) {
+    for (std::size_t i = 0; i < a.waypoints.size(); ++i) {
+      const Waypoint& w = a.waypoints[i];
+      out << w.t_s << "," << a.id << "," << class_name(a.object_class) << "," << w.xyz_m.x() << ","
+          << w.xyz_m.y() << ",";
+      if (std::isfinite(w.xyz_m.z())) out << w.xyz_m.z();
+      out << ",";
+      if (i == 0) optional(a.height_m);
+      out << ",";
+      if (i == 0) optional(a.width_m);
+      out << ",";
+      if (i == 0) optional(a.reflectivity);
+      out << "\n";
+    }
+  }
+  return out.str();
+}
+
 Scenario load_scenario_file(const std::filesystem::path& path) {
   Scenario s = parse_scenario_yaml(read_text(path), path.string());
   if (!s.trajectories_file.empty()) {

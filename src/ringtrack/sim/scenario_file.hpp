@@ -25,6 +25,9 @@ std::string format_scenario_yaml(const Scenario& s);
 /// (# comments; an optional header naming the columns in any order, also after comments),
 /// grouped by id and sorted by time; throws core::InputError naming source, line and column.
 std::vector<ScriptedActor> parse_trajectories_csv(std::string_view text, const std::string& source);
+/// The trajectory CSV text of scripted actors (header with every column, body values on each
+/// actor's first row); parse_trajectories_csv reads it back to the same actors.
+std::string format_trajectories_csv(const std::vector<ScriptedActor>& actors);
 /// A built-in scenario (number or name, optionally "-moving") or, when the argument names an
 /// existing file or ends in .yaml/.yml, that file.
 Scenario resolve_scenario(const std::string& number_name_or_file);

@@ -228,6 +228,23 @@ TEST(TrajectoryCsv, SegmentThroughACarIsRejectedWithTheFileName) {
   fs::remove_all(dir);
 }
 
+TEST(TrajectoryCsv, FormatReadsBackToTheSameActors) {
+  const fs::path file =
+      fs::path(RINGTRACK_SOURCE_DIR) / "config" / "validation" / "v4-parking.yaml";
+  const Scenario s = load_scenario_file(file);
+  ASSERT_GT(s.scripted.size(), 10u);
+  std::vector<ScriptedActor> actors = s.scripted;
+  actors.push_back({77, ObjectClass::kDrone, {{1.0, {2, 3, 4.5}}, {2.0, {3, 3, 5}}}});
+  actors.back().reflectivity = 0.25;
+  const std::string text = format_trajectories_csv(actors);
+  const auto back = parse_trajectories_csv(text, "x.csv");
+  EXPECT_EQ(format_trajectories_csv(back), text);
+  ASSERT_EQ(back.size(), actors.size());
+  EXPECT_EQ(back[3].height_m, actors[3].height_m);
+  EXPECT_EQ(back[3].waypoints.back().xyz_m.x(), actors[3].waypoints.back().xyz_m.x());
+  EXPECT_DOUBLE_EQ(back.back().waypoints[0].xyz_m.z(), 4.5);
+}
+
 TEST(TrajectoryCsv, ScenarioFileDrivesScriptedActors) {
   const fs::path dir = temp_dir("scripted");
   write(dir / "s.yaml",
@@ -274,6 +291,17 @@ TEST(CliSimulate, SameSeedGivesByteIdenticalFolders) {
   }
   EXPECT_GE(files, 9);  // 5 scans + yaml, stamps, poses, objects
   EXPECT_TRUE(any_differs);
+  // A scenario with scripted actors: the folder's scenario.yaml (with its trajectories.csv)
+  // reads back to the same actors.
+  const fs::path v2 =
+      fs::path(RINGTRACK_SOURCE_DIR) / "config" / "validation" / "v2-chat-circles.yaml";
+  ASSERT_EQ(std::system((cli.string() + " simulate " + v2.string() + " --duration 0.3 --out " +
+                         (dir / "v").string() + " > /dev/null")
+                            .c_str()),
+            0);
+  const Scenario again = load_scenario_file(dir / "v" / "scenario.yaml");
+  EXPECT_EQ(format_trajectories_csv(again.scripted),
+            format_trajectories_csv(load_scenario_file(v2).scripted));
   // Bad arguments fail with one line and exit code 1.
   EXPECT_NE(std::system(
                 (cli.string() + " simulate nowhere --out " + (dir / "d").string() + " 2> /dev/null")
