@@ -77,7 +77,7 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
       if (o.moving) ever_moving.insert(o.id);
       ground_truth.push_back({k, static_cast<std::int64_t>(o.id),
                               std::string(sim::class_name(o.object_class)), o.hit_points,
-                              o.centroid_m.cast<double>()});
+                              o.centroid_m.cast<double>(), o.body_center_m.cast<double>()});
     }
     pending_labels.push_back(scan.labels);
     const auto t2 = Clock::now();

@@ -35,6 +35,7 @@ struct EvalOptions {
   std::string target_class = "person";
   std::int64_t min_points = 1;
   bool ignore_stamps = false;
+  double moving_radius_m = 1.0;
   bool json = false;
   std::vector<std::string> filtered;  // per sequence: `ringtrack run --filtered-scans` output
 };
@@ -128,7 +129,7 @@ eval::TrackingEvalResult evaluate_ringtrack(const fs::path& gt_path, const fs::p
   gt.reserve(objects.size());
   for (const io::ObjectRow& r : objects) {
     gt.push_back({static_cast<std::int64_t>(r.scan), static_cast<std::int64_t>(r.id), r.class_name,
-                  static_cast<std::int64_t>(r.points), r.centroid});
+                  static_cast<std::int64_t>(r.points), r.centroid, r.true_center});
   }
   std::vector<eval::TrackObservation> hyps;
   hyps.reserve(tracks.size());
@@ -141,6 +142,7 @@ eval::TrackingEvalResult evaluate_ringtrack(const fs::path& gt_path, const fs::p
   options.target_class = o.target_class;
   options.min_points = o.min_points;
   options.all_hypotheses = o.all_hypotheses;
+  options.moving_radius_m = o.moving_radius_m;
   return eval::evaluate_tracks(gt, hyps, options);
 }
 
@@ -172,6 +174,8 @@ nlohmann::ordered_json metrics_json(const eval::MotSummary& s) {
   return {
       {"mota", number_or_null(s.mota())},
       {"motp", number_or_null(s.motp())},
+      {"motp_horizontal", number_or_null(s.horizontal_motp())},
+      {"mean_vertical_error", number_or_null(s.mean_vertical_error())},
       {"true_positives", s.true_positives()},
       {"matches", s.matches},
       {"false_positives", s.false_positives},
@@ -207,44 +211,29 @@ std::string fixed(double v, int decimals) {
   return buf;
 }
 
-void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSummary& overall,
-                const EvalOptions& o) {
-  const bool mot = o.format == "motchallenge";
-  if (mot) {
-    std::cout << "MOTChallenge boxes: a pair matches when IoU >= " << o.min_iou
-              << "; MOTP is the mean (1 - IoU) of the matches\n";
-  } else {
-    std::cout << "ground truth: class '" << o.target_class << "' with >= " << o.min_points
-              << " hit points; match when distance < " << o.threshold_m << " m; "
-              << (o.all_hypotheses ? "all hypotheses"
-                                   : "paper mode: hypotheses dynamic at least once")
-              << "\n";
-  }
-  for (const SequenceResult& s : sequences) {
-    std::cout << "sequence " << s.name << ": gt " << s.gt_path << ", tracks " << s.tracks_path;
-    if (!mot) {
-      std::cout << " (" << s.result.gt_rows_used << " ground-truth rows used, "
-                << s.result.gt_rows_skipped << " skipped; " << s.result.hypotheses_evaluated
-                << " of " << s.result.hypotheses_total << " hypotheses evaluated)";
-    }
-    std::cout << "\n";
-  }
-
+// One column per sequence (and "overall" with several), one row per metric.
+void print_table(const std::vector<SequenceResult>& sequences,
+                 std::vector<const eval::MotSummary*> columns, const eval::MotSummary& overall,
+                 bool mot) {
   std::vector<std::string> header = {"metric"};
-  std::vector<const eval::MotSummary*> columns;
-  for (const SequenceResult& s : sequences) {
-    header.push_back(s.name);
-    columns.push_back(&s.result.summary);
-  }
+  for (const SequenceResult& s : sequences) header.push_back(s.name);
   if (sequences.size() > 1) {
     header.push_back("overall");
     columns.push_back(&overall);
   }
   using Getter = std::string (*)(const eval::MotSummary&);
-  const std::vector<std::pair<std::string, Getter>> rows = {
+  std::vector<std::pair<std::string, Getter>> rows = {
       {"MOTA", [](const eval::MotSummary& s) { return fixed(s.mota(), 4); }},
       {mot ? "MOTP (1-IoU)" : "MOTP (m)",
        [](const eval::MotSummary& s) { return fixed(s.motp(), 4); }},
+  };
+  if (!mot) {
+    rows.emplace_back("MOTP x-y (m)",
+                      [](const eval::MotSummary& s) { return fixed(s.horizontal_motp(), 4); });
+    rows.emplace_back("z bias (m)",
+                      [](const eval::MotSummary& s) { return fixed(s.mean_vertical_error(), 4); });
+  }
+  const std::vector<std::pair<std::string, Getter>> counts = {
       {"TP (matches+IDSW)",
        [](const eval::MotSummary& s) { return std::to_string(s.true_positives()); }},
       {"matches", [](const eval::MotSummary& s) { return std::to_string(s.matches); }},
@@ -271,6 +260,7 @@ void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSum
        [](const eval::MotSummary& s) { return std::to_string(s.hypothesis_presences); }},
       {"frames", [](const eval::MotSummary& s) { return std::to_string(s.frames); }},
   };
+  rows.insert(rows.end(), counts.begin(), counts.end());
   std::vector<std::size_t> width(header.size(), 0);
   for (std::size_t c = 0; c < header.size(); ++c) width[c] = header[c].size();
   std::vector<std::vector<std::string>> cells;
@@ -295,6 +285,49 @@ void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSum
   for (const auto& line : cells) print_line(line);
 }
 
+void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSummary& overall,
+                const eval::MotSummary& overall_moving, const EvalOptions& o) {
+  const bool mot = o.format == "motchallenge";
+  if (mot) {
+    std::cout << "MOTChallenge boxes: a pair matches when IoU >= " << o.min_iou
+              << "; MOTP is the mean (1 - IoU) of the matches\n";
+  } else {
+    std::cout << "ground truth: class '" << o.target_class << "' with >= " << o.min_points
+              << " hit points; match when distance < " << o.threshold_m << " m; "
+              << (o.all_hypotheses ? "all hypotheses"
+                                   : "paper mode: hypotheses dynamic at least once")
+              << "\n";
+  }
+  for (const SequenceResult& s : sequences) {
+    std::cout << "sequence " << s.name << ": gt " << s.gt_path << ", tracks " << s.tracks_path;
+    if (!mot) {
+      std::cout << " (" << s.result.gt_rows_used << " ground-truth rows used, "
+                << s.result.gt_rows_skipped << " skipped; " << s.result.hypotheses_evaluated
+                << " of " << s.result.hypotheses_total << " hypotheses evaluated)";
+    }
+    std::cout << "\n";
+  }
+  std::vector<const eval::MotSummary*> columns;
+  for (const SequenceResult& s : sequences) columns.push_back(&s.result.summary);
+  print_table(sequences, columns, overall, mot);
+  if (mot) return;
+
+  // The second block: ground truth restricted to objects that move (docs/evaluation.md).
+  std::cout
+      << "\nmoving objects only: ground truth restricted to objects whose x-y position leaves "
+         "a disc of radius "
+      << o.moving_radius_m
+      << " m around their first position; objects that never move are don't-care (a "
+         "hypothesis matched to one is neither TP nor FP)\n";
+  for (const SequenceResult& s : sequences) {
+    std::cout << "sequence " << s.name << ": " << s.result.moving_objects << " moving, "
+              << s.result.still_objects << " never-moving (don't-care) objects\n";
+  }
+  columns.clear();
+  for (const SequenceResult& s : sequences) columns.push_back(&s.result.moving_only);
+  print_table(sequences, columns, overall_moving, mot);
+}
+
 nlohmann::ordered_json map_json(const eval::MapCounts& m) {
   return {{"static_points", m.static_points},           {"static_kept", m.static_kept},
           {"dynamic_points", m.dynamic_points},         {"dynamic_removed", m.dynamic_removed},
@@ -315,6 +348,7 @@ void run_eval(const EvalOptions& o) {
   const bool mot = o.format == "motchallenge";
   std::vector<SequenceResult> sequences;
   eval::MotSummary overall;
+  eval::MotSummary overall_moving;
   eval::MapCounts overall_map;
   for (std::size_t k = 0; k < o.gt.size(); ++k) {
     SequenceResult s;
@@ -325,6 +359,7 @@ void run_eval(const EvalOptions& o) {
     s.result = mot ? evaluate_motchallenge(gt_path, tracks_path, o)
                    : evaluate_ringtrack(gt_path, tracks_path, o);
     overall += s.result.summary;
+    overall_moving += s.result.moving_only;
     if (!o.filtered.empty()) {
       if (mot)
         throw core::InputError(
@@ -336,7 +371,7 @@ void run_eval(const EvalOptions& o) {
   }
 
   if (!o.json) {
-    print_text(sequences, overall, o);
+    print_text(sequences, overall, overall_moving, o);
     if (!o.filtered.empty()) {
       for (const auto& s : sequences) {
         std::printf(
@@ -363,6 +398,7 @@ void run_eval(const EvalOptions& o) {
     out["class"] = o.target_class;
     out["min_points"] = o.min_points;
     out["all_hypotheses"] = o.all_hypotheses;
+    out["moving_radius_m"] = o.moving_radius_m;
   }
   out["sequences"] = nlohmann::ordered_json::array();
   for (const SequenceResult& s : sequences) {
@@ -374,10 +410,26 @@ void run_eval(const EvalOptions& o) {
       j["hypotheses_evaluated"] = s.result.hypotheses_evaluated;
     }
     j["metrics"] = metrics_json(s.result.summary);
+    if (!mot) {
+      j["moving_only"] = {{"moving_objects", s.result.moving_objects},
+                          {"never_moving_objects", s.result.still_objects},
+                          {"metrics", metrics_json(s.result.moving_only)}};
+    }
     if (s.map) j["map"] = map_json(*s.map);
     out["sequences"].push_back(std::move(j));
   }
   out["overall"] = metrics_json(overall);
+  if (!mot) {
+    std::int64_t moving = 0;
+    std::int64_t still = 0;
+    for (const SequenceResult& s : sequences) {
+      moving += s.result.moving_objects;
+      still += s.result.still_objects;
+    }
+    out["overall_moving_only"] = {{"moving_objects", moving},
+                                  {"never_moving_objects", still},
+                                  {"metrics", metrics_json(overall_moving)}};
+  }
   if (!o.filtered.empty()) out["overall_map"] = map_json(overall_map);
   std::cout << out.dump(2) << "\n";
 }
@@ -416,6 +468,11 @@ void register_eval(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--ignore-stamps", o->ignore_stamps,
                 "do not require equal stamps for the same scan index in both files");
+  cmd->add_option("--moving-radius", o->moving_radius_m,
+                  "for the \"moving objects only\" figures: an object moves when its x-y "
+                  "position leaves the disc of this radius around its first position, metres")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
   cmd->add_flag("--json", o->json, "print JSON instead of a table");
   cmd->add_option(
       "--filtered", o->filtered,

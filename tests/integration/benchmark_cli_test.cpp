@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -98,6 +99,52 @@ TEST_F(BenchmarkCli, WritesReportTimingAndJson) {
   }
 }
 
+// Horizontal MOTP, vertical error and the moving-objects-only figures, per run and per group.
+TEST_F(BenchmarkCli, ReportsHorizontalMotpAndMovingObjectsOnly) {
+  ASSERT_EQ(result_->exit_code, 0) << result_->err;
+  const auto j = nlohmann::json::parse(result_->out);
+  EXPECT_EQ(j["moving_radius_m"].get<double>(), 1.0);
+  long fp = 0;
+  long gt = 0;
+  long moving_objects = 0;
+  for (const auto& c : j["cases"]) {
+    const auto& m = c["metrics"];
+    ASSERT_FALSE(m["motp"].is_null());
+    // Per pair the x-y distance and |dz| are at most the 3-D distance; so are their means.
+    EXPECT_LE(m["motp_horizontal"].get<double>(), m["motp"].get<double>() + 1e-12);
+    EXPECT_LE(std::abs(m["mean_vertical_error"].get<double>()), m["motp"].get<double>() + 1e-12);
+    const auto& r = c["moving_only"];
+    EXPECT_EQ(r["moving_objects"].get<long>() + r["never_moving_objects"].get<long>(),
+              m["gt_objects"].get<long>());
+    EXPECT_EQ(r["metrics"]["gt_objects"], r["moving_objects"]);
+    EXPECT_LE(r["metrics"]["gt_presences"].get<long>(), m["gt_presences"].get<long>());
+    EXPECT_LE(r["metrics"]["false_positives"].get<long>(), m["false_positives"].get<long>());
+    fp += r["metrics"]["false_positives"].get<long>();
+    gt += r["metrics"]["gt_presences"].get<long>();
+    moving_objects += r["moving_objects"].get<long>();
+  }
+  EXPECT_GT(moving_objects, 0) << "a vacuous restriction";
+  const auto& overall = j["groups"]["overall"]["moving_only"];
+  EXPECT_EQ(overall["metrics"]["false_positives"].get<long>(), fp);
+  EXPECT_EQ(overall["metrics"]["gt_presences"].get<long>(), gt);
+  EXPECT_EQ(overall["moving_objects"].get<long>(), moving_objects);
+
+  const std::string report = read(*dir_ / "bench" / "report.md");
+  for (const char* needle :
+       {"| scenario | scans | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML |",
+        "## Accuracy on moving objects only", "leaves a disc of radius 1.00 m",
+        "| scenario | objects | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) |"}) {
+    EXPECT_NE(report.find(needle), std::string::npos) << needle;
+  }
+  // Two tables with a row per run and per group.
+  std::size_t rows = 0;
+  for (std::size_t at = report.find("| 7 hall (moving) |"); at != std::string::npos;
+       at = report.find("| 7 hall (moving) |", at + 1)) {
+    ++rows;
+  }
+  EXPECT_EQ(rows, 3u);  // accuracy, moving objects only, time per stage
+}
+
 // The benchmark's in-memory path must give exactly what the file-based tools give.
 TEST_F(BenchmarkCli, MatchesSimulateRunEval) {
   ASSERT_EQ(result_->exit_code, 0) << result_->err;
@@ -135,6 +182,20 @@ TEST_F(BenchmarkCli, MatchesSimulateRunEval) {
     if (!m["motp"].is_null()) {
       // tracks.csv and objects.csv round positions to millimetres or finer.
       EXPECT_NEAR(m["motp"].get<double>(), ev["motp"].get<double>(), 1e-3) << scenario;
+    }
+    // The moving-objects-only figures agree too (objects.csv carries the true centres).
+    const auto evj = nlohmann::json::parse(r.out);
+    EXPECT_EQ(c["moving_only"]["moving_objects"], evj["overall_moving_only"]["moving_objects"]);
+    const auto& bm = c["moving_only"]["metrics"];
+    const auto& em = evj["overall_moving_only"]["metrics"];
+    for (const char* key : {"matches", "false_positives", "misses", "id_switches", "gt_presences",
+                            "hypothesis_presences"}) {
+      EXPECT_EQ(bm[key], em[key]) << "scenario " << scenario << ": moving only " << key;
+    }
+    if (!m["motp_horizontal"].is_null()) {
+      EXPECT_NEAR(m["motp_horizontal"].get<double>(), ev["motp_horizontal"].get<double>(), 1e-3);
+      EXPECT_NEAR(m["mean_vertical_error"].get<double>(), ev["mean_vertical_error"].get<double>(),
+                  1e-3);
     }
   }
 }

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -176,6 +177,114 @@ TEST_F(EvalCli, TextTable) {
   EXPECT_NE(r.out.find("0.1143"), std::string::npos) << r.out;
 }
 
+TEST_F(EvalCli, HorizontalMotpAndVerticalErrorInFixture) {
+  // Centroids and tracks all lie at z = 0: the horizontal MOTP is the MOTP, no height bias.
+  const auto m =
+      run_json("--gt " + quoted(dir()) + " --tracks " + quoted(dir() / "tracks.csv"))["overall"];
+  EXPECT_NEAR(m["motp_horizontal"].get<double>(), 0.8 / 7.0, 1e-9);
+  EXPECT_NEAR(m["mean_vertical_error"].get<double>(), 0.0, 1e-12);
+}
+
+// Four scans. Person 1 walks x = 0, 0.5, 1, 1.5 (moves); person 2 stands at (5, 0). Centroids at
+// z = 1. Track 10 on person 1, offset (0.3, 0, +0.2); track 11 on person 2, offset
+// (0, 0.1, -0.2); track 13 is clutter.
+class EvalCliMoving : public EvalCli {
+ protected:
+  void SetUp() override {
+    EvalCli::SetUp();
+    std::string objects = kObjectsHeader + "\n";
+    std::string tracks = kTracksHeader + "\n";
+    const auto obj = [](int s, int id, double x, double y) {
+      std::ostringstream o;
+      o << s << ',' << stamp(s) << ',' << id << ",person,10," << x << ',' << y << ",1," << x - 0.2
+        << ',' << y - 0.2 << ",0," << x + 0.2 << ',' << y + 0.2 << ",1.8," << x << ',' << y
+        << ",0.9," << (id == 1 ? 1 : 0) << "\n";
+      return o.str();
+    };
+    const auto trk = [](int s, int id, double x, double y, double z) {
+      std::ostringstream o;
+      o << s << ',' << stamp(s) << ',' << id << ',' << x << ',' << y << ',' << z
+        << ",0,0,0,nan,nan,nan,nan,nan,nan,1,1,3,20\n";
+      return o.str();
+    };
+    for (int s = 0; s < 4; ++s) {
+      objects += obj(s, 1, 0.5 * s, 0.0);
+      objects += obj(s, 2, 5.0, 0.0);
+      tracks += trk(s, 10, 0.5 * s + 0.3, 0.0, 1.2);
+      tracks += trk(s, 11, 5.0, 0.1, 0.8);
+      tracks += trk(s, 13, 20.0, 0.0, 1.0);
+    }
+    fs::create_directories(dir() / "moving");
+    write(dir() / "moving" / "objects.csv", objects);
+    write(dir() / "moving" / "tracks.csv", tracks);
+  }
+  [[nodiscard]] std::string args() const {
+    return "--gt " + quoted(dir() / "moving") + " --tracks " +
+           quoted(dir() / "moving" / "tracks.csv");
+  }
+};
+
+TEST_F(EvalCliMoving, JsonFullAndMovingOnlyFigures) {
+  const auto j = run_json(args());
+  EXPECT_EQ(j["moving_radius_m"].get<double>(), 1.0);
+  const auto& full = j["overall"];
+  EXPECT_EQ(full["gt_presences"], 8);
+  EXPECT_EQ(full["true_positives"], 8);
+  EXPECT_EQ(full["false_positives"], 4);
+  EXPECT_NEAR(full["mota"].get<double>(), 0.5, 1e-12);
+  EXPECT_NEAR(full["motp"].get<double>(), (std::sqrt(0.13) + std::sqrt(0.05)) / 2.0, 1e-9);
+  EXPECT_NEAR(full["motp_horizontal"].get<double>(), 0.2, 1e-9);
+  EXPECT_NEAR(full["mean_vertical_error"].get<double>(), 0.0, 1e-9);
+
+  // Person 2 never moves: don't-care. Track 11 on it is neither a TP nor an FP.
+  const auto& seq = j["sequences"][0]["moving_only"];
+  EXPECT_EQ(seq["moving_objects"], 1);
+  EXPECT_EQ(seq["never_moving_objects"], 1);
+  const auto& m = seq["metrics"];
+  EXPECT_EQ(m["gt_presences"], 4);
+  EXPECT_EQ(m["true_positives"], 4);
+  EXPECT_EQ(m["false_positives"], 4);
+  EXPECT_EQ(m["misses"], 0);
+  EXPECT_EQ(m["hypothesis_presences"], 8);
+  EXPECT_EQ(m["gt_objects"], 1);
+  EXPECT_NEAR(m["mota"].get<double>(), 0.0, 1e-12);
+  EXPECT_NEAR(m["motp"].get<double>(), std::sqrt(0.13), 1e-9);
+  EXPECT_NEAR(m["motp_horizontal"].get<double>(), 0.3, 1e-9);
+  EXPECT_NEAR(m["mean_vertical_error"].get<double>(), 0.2, 1e-9);
+  EXPECT_EQ(j["overall_moving_only"]["metrics"], m);
+  EXPECT_EQ(j["overall_moving_only"]["moving_objects"], 1);
+
+  // Person 1 moves 1.5 m: within a 2 m disc it never moves either; nothing is left to track and
+  // only the clutter counts.
+  const auto wide = run_json(args() + " --moving-radius 2")["overall_moving_only"];
+  EXPECT_EQ(wide["moving_objects"], 0);
+  EXPECT_EQ(wide["never_moving_objects"], 2);
+  EXPECT_EQ(wide["metrics"]["gt_presences"], 0);
+  EXPECT_EQ(wide["metrics"]["false_positives"], 4);
+  EXPECT_TRUE(wide["metrics"]["mota"].is_null());
+  EXPECT_TRUE(wide["metrics"]["motp_horizontal"].is_null());
+
+  const auto bad = run_command(kCli + " eval " + args() + " --moving-radius -1");
+  EXPECT_NE(bad.exit_code, 0);
+}
+
+TEST_F(EvalCliMoving, TextHasASecondBlock) {
+  const auto r = run_command(kCli + " eval " + args());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto second = r.out.find("moving objects only");
+  ASSERT_NE(second, std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("1 moving, 1 never-moving (don't-care) objects", second), std::string::npos)
+      << r.out;
+  for (const char* row : {"MOTP x-y (m)", "z bias (m)"}) {
+    const auto first = r.out.find(row);
+    ASSERT_NE(first, std::string::npos) << row;
+    EXPECT_LT(first, second) << row;
+    EXPECT_NE(r.out.find(row, second), std::string::npos) << row;
+  }
+  EXPECT_NE(r.out.find("0.2000", second), std::string::npos) << r.out;  // z bias of person 1
+  EXPECT_NE(r.out.find("0.3000", second), std::string::npos) << r.out;  // its x-y MOTP
+}
+
 TEST_F(EvalCli, MotChallengeBoxes) {
   fs::create_directories(dir() / "MOT-01" / "gt");
   write(dir() / "MOT-01" / "gt" / "gt.txt",
@@ -198,6 +307,8 @@ TEST_F(EvalCli, MotChallengeBoxes) {
   EXPECT_EQ(m["fragmentations"], 1);
   EXPECT_NEAR(m["mota"].get<double>(), 0.0, 1e-12);
   EXPECT_NEAR(m["motp"].get<double>(), (0.5 + 2.0 / 11.0) / 2.0, 1e-12);
+  EXPECT_TRUE(m["motp_horizontal"].is_null());  // boxes have no x-y distance
+  EXPECT_FALSE(j.contains("overall_moving_only"));
 }
 
 TEST_F(EvalCli, MissingColumnExitsOneNamingIt) {

@@ -221,7 +221,12 @@ class Schema {
     number("initial_velocity_stddev_mps", t.initial_velocity_stddev_mps, 1e-6, 1e3,
            "standard deviation of a new hypothesis' velocity (m/s); its mean is zero");
     number("measurement_covariance_scale", t.measurement_covariance_scale, 1e-6, 1e6,
-           "the Kalman measurement noise is a detection's covariance times this");
+           "association: a detection's position uncertainty in the assignment cost is its point "
+           "covariance times this (the object's extent, so a partial view still pairs)");
+    number("centroid_noise_m", t.centroid_noise_m, 0.0, 10.0,
+           "Kalman update: the measurement noise of a detection's centroid is its standard error "
+           "(point covariance / points) plus this standard deviation per axis (m: limb swing, "
+           "partial views); 0 = update with the association covariance instead");
     number("delete_eigenvalue_m2", t.delete_eigenvalue_m2, 1e-6, 1e6,
            "a hypothesis is deleted once an eigenvalue of its position covariance exceeds this "
            "(m^2); docs/tracking.md converts it to missed scans");

@@ -73,7 +73,8 @@ struct TrackingConfig {
                                              // ground
   double vertical_position_noise{0.5};       // constant_position: z random-walk density (m^2/s)
   double initial_velocity_stddev_mps{1.5};   // velocity prior of a new hypothesis
-  double measurement_covariance_scale{0.5};  // detection covariance times this is the noise R
+  double measurement_covariance_scale{0.5};  // detection covariance times this: association R
+  double centroid_noise_m{0.05};  // filter update noise: centroid standard error (+) this per axis
   double delete_eigenvalue_m2{1.0};    // delete when a position-covariance eigenvalue exceeds this
   double merge_distance_m{0.3};        // younger hypotheses this close to older ones are deleted
   double min_speed_kmh{1.0};           // reported speeds up to this are reported as zero

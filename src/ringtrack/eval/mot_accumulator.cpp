@@ -59,6 +59,12 @@ double MotSummary::mota() const {
 double MotSummary::motp() const {
   return true_positives() == 0 ? kNaN : distance_sum / static_cast<double>(true_positives());
 }
+double MotSummary::horizontal_motp() const {
+  return offset_pairs == 0 ? kNaN : horizontal_distance_sum / static_cast<double>(offset_pairs);
+}
+double MotSummary::mean_vertical_error() const {
+  return offset_pairs == 0 ? kNaN : vertical_error_sum / static_cast<double>(offset_pairs);
+}
 double MotSummary::recall() const {
   return ratio(true_positives(), gt_presences);
 }
@@ -95,6 +101,9 @@ MotSummary& MotSummary::operator+=(const MotSummary& o) {
   misses += o.misses;
   fragmentations += o.fragmentations;
   distance_sum += o.distance_sum;
+  offset_pairs += o.offset_pairs;
+  horizontal_distance_sum += o.horizontal_distance_sum;
+  vertical_error_sum += o.vertical_error_sum;
   gt_objects += o.gt_objects;
   hypotheses += o.hypotheses;
   mostly_tracked += o.mostly_tracked;
@@ -125,9 +134,10 @@ void MotAccumulator::record(MotEventType type, std::int64_t object_id, std::int6
   }
 }
 
-void MotAccumulator::update(std::span<const std::int64_t> object_ids,
-                            std::span<const std::int64_t> hypothesis_ids,
-                            const Eigen::MatrixXd& distances) {
+std::vector<MotPair> MotAccumulator::update(std::span<const std::int64_t> object_ids,
+                                            std::span<const std::int64_t> hypothesis_ids,
+                                            const Eigen::MatrixXd& distances,
+                                            std::span<const std::uint8_t> dont_care) {
   const std::int64_t frame = counts_.frames;
   const auto n_obj = static_cast<Eigen::Index>(object_ids.size());
   const auto n_hyp = static_cast<Eigen::Index>(hypothesis_ids.size());
@@ -137,6 +147,14 @@ void MotAccumulator::update(std::span<const std::int64_t> object_ids,
                            " hypotheses but a " + std::to_string(distances.rows()) + "x" +
                            std::to_string(distances.cols()) + " distance matrix");
   }
+  if (!dont_care.empty() && dont_care.size() != object_ids.size()) {
+    throw core::InputError("MOT accumulator: frame " + std::to_string(frame) + " has " +
+                           std::to_string(n_obj) + " objects but " +
+                           std::to_string(dont_care.size()) + " don't-care flags");
+  }
+  const auto ignored_object = [&](Eigen::Index i) {
+    return !dont_care.empty() && dont_care[static_cast<std::size_t>(i)] != 0;
+  };
   require_unique(object_ids, "object", frame);
   require_unique(hypothesis_ids, "hypothesis", frame);
   for (Eigen::Index i = 0; i < n_obj; ++i) {
@@ -151,23 +169,19 @@ void MotAccumulator::update(std::span<const std::int64_t> object_ids,
     }
   }
 
-  // Pairable entries, with NaN for the rest; also the per-frame overlaps for the id metrics.
+  // Pairable entries, with NaN for the rest.
   Eigen::MatrixXd usable(n_obj, n_hyp);
   for (Eigen::Index i = 0; i < n_obj; ++i) {
     for (Eigen::Index j = 0; j < n_hyp; ++j) {
       const double d = distances(i, j);
-      if (pairable(d)) {
-        usable(i, j) = d;
-        ++overlap_[{object_ids[static_cast<std::size_t>(i)],
-                    hypothesis_ids[static_cast<std::size_t>(j)]}];
-      } else {
-        usable(i, j) = kNaN;
-      }
+      usable(i, j) = pairable(d) ? d : kNaN;
     }
   }
 
   std::vector<Eigen::Index> row_match(static_cast<std::size_t>(n_obj), kUnassigned);
   std::vector<char> col_taken(static_cast<std::size_t>(n_hyp), 0);
+  std::vector<char> col_ignored(static_cast<std::size_t>(n_hyp), 0);  // matched to don't-care
+  std::vector<MotPair> counted;
   std::unordered_map<std::int64_t, Eigen::Index> col_of_hypothesis;
   for (Eigen::Index j = 0; j < n_hyp; ++j) {
     col_of_hypothesis.emplace(hypothesis_ids[static_cast<std::size_t>(j)], j);
@@ -183,14 +197,20 @@ void MotAccumulator::update(std::span<const std::int64_t> object_ids,
     ObjectState& s = *state[static_cast<std::size_t>(i)];
     const bool is_switch = s.last_hypothesis.has_value() && *s.last_hypothesis != h;
     const double d = usable(i, j);
-    if (is_switch) {
+    if (ignored_object(i)) {
+      col_ignored[static_cast<std::size_t>(j)] = 1;
+      record(MotEventType::kIgnored, o, h, d);
+    } else if (is_switch) {
       ++counts_.switches;
       record(MotEventType::kSwitch, o, h, d);
     } else {
       ++counts_.matches;
       record(MotEventType::kMatch, o, h, d);
     }
-    counts_.distance_sum += d;
+    if (!ignored_object(i)) {
+      counts_.distance_sum += d;
+      counted.push_back({i, j});
+    }
     s.last_hypothesis = h;
     s.last_match_frame = frame;
     row_match[static_cast<std::size_t>(i)] = j;
@@ -231,8 +251,13 @@ void MotAccumulator::update(std::span<const std::int64_t> object_ids,
     if (j != kUnassigned) commit(i, j);
   }
 
-  // 3. Misses, per-object tracking history; 4. false positives.
+  // 3. Misses, per-object tracking history; 4. false positives. Don't-care objects and the
+  //    hypotheses matched to them are not counted.
+  std::int64_t counted_objects = 0;
+  std::int64_t counted_hypotheses = 0;
   for (Eigen::Index i = 0; i < n_obj; ++i) {
+    if (ignored_object(i)) continue;
+    ++counted_objects;
     ObjectState& s = *state[static_cast<std::size_t>(i)];
     ++s.frames_present;
     if (row_match[static_cast<std::size_t>(i)] != kUnassigned) {
@@ -247,22 +272,35 @@ void MotAccumulator::update(std::span<const std::int64_t> object_ids,
     }
   }
   for (Eigen::Index j = 0; j < n_hyp; ++j) {
+    if (col_ignored[static_cast<std::size_t>(j)] != 0) continue;
+    ++counted_hypotheses;
     ++hypothesis_frames_[hypothesis_ids[static_cast<std::size_t>(j)]];
     if (col_taken[static_cast<std::size_t>(j)] == 0) {
       ++counts_.false_positives;
       record(MotEventType::kFalsePositive, -1, hypothesis_ids[static_cast<std::size_t>(j)], kNaN);
     }
   }
-  counts_.gt_presences += n_obj;
-  counts_.hypothesis_presences += n_hyp;
+  // Overlaps for the id metrics, between counted objects and counted hypothesis presences.
+  for (Eigen::Index i = 0; i < n_obj; ++i) {
+    if (ignored_object(i)) continue;
+    for (Eigen::Index j = 0; j < n_hyp; ++j) {
+      if (col_ignored[static_cast<std::size_t>(j)] != 0 || std::isnan(usable(i, j))) continue;
+      ++overlap_[{object_ids[static_cast<std::size_t>(i)],
+                  hypothesis_ids[static_cast<std::size_t>(j)]}];
+    }
+  }
+  counts_.gt_presences += counted_objects;
+  counts_.hypothesis_presences += counted_hypotheses;
   ++counts_.frames;
+  return counted;
 }
 
 MotSummary MotAccumulator::summary() const {
   MotSummary out = counts_;
-  out.gt_objects = static_cast<std::int64_t>(objects_.size());
   out.hypotheses = static_cast<std::int64_t>(hypothesis_frames_.size());
   for (const auto& [id, s] : objects_) {
+    if (s.frames_present == 0) continue;  // only ever don't-care
+    ++out.gt_objects;
     // Integer comparisons: tracked/present >= 0.8 and < 0.2 without rounding.
     if (5 * s.frames_tracked >= 4 * s.frames_present) {
       ++out.mostly_tracked;

@@ -30,11 +30,12 @@ struct MotOptions {
   bool record_events = false;
 };
 
-/// Kind of a per-frame event, as py-motmetrics' event types.
-enum class MotEventType { kMatch, kSwitch, kMiss, kFalsePositive };
+/// Kind of a per-frame event, as py-motmetrics' event types, plus kIgnored: a hypothesis matched
+/// to a don't-care object (neither a true nor a false positive).
+enum class MotEventType { kMatch, kSwitch, kMiss, kFalsePositive, kIgnored };
 
-/// One event of the log: a match (or switch) has both ids, a miss only the object, an FP only the
-/// hypothesis; absent ids are -1 and the distance of a miss or FP is NaN.
+/// One event of the log: a match, switch or ignored pair has both ids, a miss only the object, an
+/// FP only the hypothesis; absent ids are -1 and the distance of a miss or FP is NaN.
 struct MotEvent {
   std::int64_t frame = 0;
   MotEventType type = MotEventType::kMatch;
@@ -51,18 +52,22 @@ struct MotSummary {
   std::int64_t hypothesis_presences = 0;  ///< hypothesis presences summed over frames
   std::int64_t matches = 0;   ///< correspondences that are not ID switches (py-motmetrics)
   std::int64_t switches = 0;  ///< correspondences to a different hypothesis than the last one
-  std::int64_t false_positives = 0;     ///< unmatched hypothesis presences
-  std::int64_t misses = 0;              ///< unmatched object presences (FN)
-  std::int64_t fragmentations = 0;      ///< tracked -> missed transitions later tracked again
-  double distance_sum = 0.0;            ///< sum of distances over matches and switches
-  std::int64_t gt_objects = 0;          ///< distinct object ids
-  std::int64_t hypotheses = 0;          ///< distinct hypothesis ids
-  std::int64_t mostly_tracked = 0;      ///< objects tracked in >= 80 % of their frames
-  std::int64_t partially_tracked = 0;   ///< objects tracked in >= 20 % and < 80 %
-  std::int64_t mostly_lost = 0;         ///< objects tracked in < 20 % of their frames
-  std::int64_t id_true_positives = 0;   ///< IDTP of the global id assignment
-  std::int64_t id_false_positives = 0;  ///< IDFP
-  std::int64_t id_false_negatives = 0;  ///< IDFN
+  std::int64_t false_positives = 0;  ///< unmatched hypothesis presences
+  std::int64_t misses = 0;           ///< unmatched object presences (FN)
+  std::int64_t fragmentations = 0;   ///< tracked -> missed transitions later tracked again
+  double distance_sum = 0.0;         ///< sum of distances over matches and switches
+  /// Correspondences whose offsets were added below (3-D protocol: all of them; boxes: none).
+  std::int64_t offset_pairs = 0;
+  double horizontal_distance_sum = 0.0;  ///< sum of x-y distances over those correspondences
+  double vertical_error_sum = 0.0;       ///< sum of signed z errors (hypothesis - object)
+  std::int64_t gt_objects = 0;           ///< distinct object ids
+  std::int64_t hypotheses = 0;           ///< distinct hypothesis ids
+  std::int64_t mostly_tracked = 0;       ///< objects tracked in >= 80 % of their frames
+  std::int64_t partially_tracked = 0;    ///< objects tracked in >= 20 % and < 80 %
+  std::int64_t mostly_lost = 0;          ///< objects tracked in < 20 % of their frames
+  std::int64_t id_true_positives = 0;    ///< IDTP of the global id assignment
+  std::int64_t id_false_positives = 0;   ///< IDFP
+  std::int64_t id_false_negatives = 0;   ///< IDFN
 
   /// Matches plus switches: every frame-level correspondence (CLEAR MOT's c_t summed).
   [[nodiscard]] std::int64_t true_positives() const { return matches + switches; }
@@ -70,6 +75,10 @@ struct MotSummary {
   [[nodiscard]] double mota() const;
   /// distance_sum / true_positives; NaN without correspondences.
   [[nodiscard]] double motp() const;
+  /// horizontal_distance_sum / offset_pairs: MOTP in the x-y plane; NaN without offsets.
+  [[nodiscard]] double horizontal_motp() const;
+  /// vertical_error_sum / offset_pairs: mean signed height error; NaN without offsets.
+  [[nodiscard]] double mean_vertical_error() const;
   /// true_positives / gt_presences; NaN without objects.
   [[nodiscard]] double recall() const;
   /// true_positives / hypothesis_presences; NaN without hypotheses.
@@ -90,6 +99,12 @@ struct MotSummary {
   MotSummary& operator+=(const MotSummary& other);
 };
 
+/// A correspondence of one frame: indices into that frame's object and hypothesis ids.
+struct MotPair {
+  Eigen::Index object = 0;
+  Eigen::Index hypothesis = 0;
+};
+
 /// Accumulates CLEAR MOT events frame by frame from object ids, hypothesis ids and distances.
 class MotAccumulator {
  public:
@@ -97,10 +112,16 @@ class MotAccumulator {
   explicit MotAccumulator(MotOptions options = {});
 
   /// Adds one frame. distances is objects x hypotheses (rows in object_ids order, columns in
-  /// hypothesis_ids order); NaN/inf or beyond the threshold = not pairable. Throws
-  /// core::InputError for duplicate ids, a shape mismatch or a negative distance.
-  void update(std::span<const std::int64_t> object_ids,
-              std::span<const std::int64_t> hypothesis_ids, const Eigen::MatrixXd& distances);
+  /// hypothesis_ids order); NaN/inf or beyond the threshold = not pairable. dont_care is empty
+  /// or has one flag per object: a flagged object takes part in the matching like any other,
+  /// but is not counted (no presence, miss or match) and the hypothesis matched to it is
+  /// ignored (neither TP nor FP, no presence), as MOTChallenge's distractors. Returns the
+  /// frame's counted correspondences (matches and switches). Throws core::InputError for
+  /// duplicate ids, a shape mismatch or a negative distance.
+  std::vector<MotPair> update(std::span<const std::int64_t> object_ids,
+                              std::span<const std::int64_t> hypothesis_ids,
+                              const Eigen::MatrixXd& distances,
+                              std::span<const std::uint8_t> dont_care = {});
 
   /// True when the distance may form a match under the options' threshold rule.
   [[nodiscard]] bool pairable(double distance) const;
@@ -113,7 +134,7 @@ class MotAccumulator {
   struct ObjectState {
     std::optional<std::int64_t> last_hypothesis;  // hypothesis of the latest match, any frame
     std::int64_t last_match_frame = -1;
-    std::int64_t frames_present = 0;
+    std::int64_t frames_present = 0;  // counted frames only (not don't-care)
     std::int64_t frames_tracked = 0;
     bool tracked_before = false;      // matched at least once
     bool missed_since_match = false;  // a miss after the latest match (pending fragmentation)

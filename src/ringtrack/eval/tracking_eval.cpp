@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <set>
 #include <string>
 #include <vector>
@@ -31,11 +32,14 @@ std::map<std::int64_t, std::vector<const T*>> group_by_frame(const std::vector<c
   return frames;
 }
 
-// Runs the accumulator over the union of frames of both sides.
-template <typename G, typename H, typename Distance>
+// Runs the accumulator over the union of frames of both sides. dont_care(object) flags objects
+// that are matched but not counted; offset(object, hypothesis) gives the position error of a
+// counted correspondence (hypothesis - object) or nullopt when positions have no meaning.
+template <typename G, typename H, typename Distance, typename DontCare, typename Offset>
 MotSummary accumulate(const std::map<std::int64_t, std::vector<const G*>>& gt,
                       const std::map<std::int64_t, std::vector<const H*>>& hyp,
-                      const MotOptions& options, Distance distance) {
+                      const MotOptions& options, Distance distance, DontCare dont_care,
+                      Offset offset) {
   std::set<std::int64_t> frames;
   for (const auto& [frame, list] : gt) frames.insert(frame);
   for (const auto& [frame, list] : hyp) frames.insert(frame);
@@ -44,6 +48,10 @@ MotSummary accumulate(const std::map<std::int64_t, std::vector<const G*>>& gt,
   const std::vector<const H*> no_hyp;
   std::vector<std::int64_t> object_ids;
   std::vector<std::int64_t> hypothesis_ids;
+  std::vector<std::uint8_t> flags;
+  std::int64_t offset_pairs = 0;
+  double horizontal_sum = 0.0;
+  double vertical_sum = 0.0;
   for (const std::int64_t frame : frames) {
     const auto g_it = gt.find(frame);
     const auto h_it = hyp.find(frame);
@@ -51,7 +59,13 @@ MotSummary accumulate(const std::map<std::int64_t, std::vector<const G*>>& gt,
     const auto& h = h_it == hyp.end() ? no_hyp : h_it->second;
     object_ids.clear();
     hypothesis_ids.clear();
-    for (const G* o : g) object_ids.push_back(o->id);
+    flags.clear();
+    bool any_dont_care = false;
+    for (const G* o : g) {
+      object_ids.push_back(o->id);
+      flags.push_back(dont_care(*o) ? 1 : 0);
+      any_dont_care = any_dont_care || flags.back() != 0;
+    }
     for (const H* t : h) hypothesis_ids.push_back(t->id);
     Eigen::MatrixXd d(static_cast<Eigen::Index>(g.size()), static_cast<Eigen::Index>(h.size()));
     for (std::size_t i = 0; i < g.size(); ++i) {
@@ -59,12 +73,54 @@ MotSummary accumulate(const std::map<std::int64_t, std::vector<const G*>>& gt,
         d(static_cast<Eigen::Index>(i), static_cast<Eigen::Index>(j)) = distance(*g[i], *h[j]);
       }
     }
-    acc.update(object_ids, hypothesis_ids, d);
+    const std::vector<MotPair> pairs = acc.update(
+        object_ids, hypothesis_ids, d,
+        any_dont_care ? std::span<const std::uint8_t>(flags) : std::span<const std::uint8_t>());
+    for (const MotPair& p : pairs) {
+      const std::optional<Eigen::Vector3d> e = offset(*g[static_cast<std::size_t>(p.object)],
+                                                      *h[static_cast<std::size_t>(p.hypothesis)]);
+      if (!e) continue;
+      ++offset_pairs;
+      horizontal_sum += e->head<2>().norm();
+      vertical_sum += e->z();
+    }
   }
-  return acc.summary();
+  MotSummary out = acc.summary();
+  out.offset_pairs = offset_pairs;
+  out.horizontal_distance_sum = horizontal_sum;
+  out.vertical_error_sum = vertical_sum;
+  return out;
+}
+
+// The position that decides whether an object moves: true centre, else centroid, else none.
+std::optional<Eigen::Vector3d> motion_position(const GroundTruthObject& o) {
+  if (o.true_center_m.allFinite()) return o.true_center_m;
+  if (o.points > 0 && o.centroid_m.allFinite()) return o.centroid_m;
+  return std::nullopt;
 }
 
 }  // namespace
+
+std::vector<std::int64_t> moving_objects(std::span<const GroundTruthObject> ground_truth,
+                                         double radius_m) {
+  if (!(radius_m >= 0.0) || !std::isfinite(radius_m)) {
+    throw core::InputError("evaluation: the moving radius must be a finite distance >= 0 m");
+  }
+  // First position per id: the lowest scan with a position.
+  std::map<std::int64_t, std::pair<std::int64_t, Eigen::Vector2d>> first;
+  for (const GroundTruthObject& o : ground_truth) {
+    const auto p = motion_position(o);
+    if (!p) continue;
+    const auto it = first.find(o.id);
+    if (it == first.end() || o.scan < it->second.first) first[o.id] = {o.scan, p->head<2>()};
+  }
+  std::set<std::int64_t> moving;
+  for (const GroundTruthObject& o : ground_truth) {
+    const auto p = motion_position(o);
+    if (p && (p->head<2>() - first.at(o.id).second).norm() > radius_m) moving.insert(o.id);
+  }
+  return {moving.begin(), moving.end()};
+}
 
 TrackingEvalResult evaluate_tracks(std::span<const GroundTruthObject> ground_truth,
                                    std::span<const TrackObservation> tracks,
@@ -118,10 +174,27 @@ TrackingEvalResult evaluate_tracks(std::span<const GroundTruthObject> ground_tru
   MotOptions mot;
   mot.threshold = options.threshold_m;
   mot.rule = ThresholdRule::kBelow;
-  result.summary = accumulate(gt_presences, hyp_frames, mot,
-                              [](const GroundTruthObject& o, const TrackObservation& t) {
-                                return (o.centroid_m - t.position_m).norm();
-                              });
+  const auto distance = [](const GroundTruthObject& o, const TrackObservation& t) {
+    return (o.centroid_m - t.position_m).norm();
+  };
+  const auto offset = [](const GroundTruthObject& o, const TrackObservation& t) {
+    return std::optional<Eigen::Vector3d>(t.position_m - o.centroid_m);
+  };
+  result.summary = accumulate(
+      gt_presences, hyp_frames, mot, distance, [](const GroundTruthObject&) { return false; },
+      offset);
+
+  const std::vector<std::int64_t> moving = moving_objects(ground_truth, options.moving_radius_m);
+  const auto is_moving = [&moving](std::int64_t id) {
+    return std::binary_search(moving.begin(), moving.end(), id);
+  };
+  std::set<std::int64_t> evaluated_ids;
+  for (const GroundTruthObject* o : gt) evaluated_ids.insert(o->id);
+  for (const std::int64_t id : evaluated_ids)
+    ++(is_moving(id) ? result.moving_objects : result.still_objects);
+  result.moving_only = accumulate(
+      gt_presences, hyp_frames, mot, distance,
+      [&is_moving](const GroundTruthObject& o) { return !is_moving(o.id); }, offset);
   return result;
 }
 
@@ -166,7 +239,11 @@ MotSummary evaluate_boxes(std::span<const BoxObservation> ground_truth,
   mot.rule = ThresholdRule::kAtMost;
   return accumulate(
       group_by_frame(gt, frame_of, "ground-truth"), group_by_frame(hyp, frame_of, "hypothesis"),
-      mot, [](const BoxObservation& a, const BoxObservation& b) { return 1.0 - box_iou(a, b); });
+      mot, [](const BoxObservation& a, const BoxObservation& b) { return 1.0 - box_iou(a, b); },
+      [](const BoxObservation&) { return false; },
+      [](const BoxObservation&, const BoxObservation&) {
+        return std::optional<Eigen::Vector3d>();
+      });
 }
 
 }  // namespace ringtrack::eval

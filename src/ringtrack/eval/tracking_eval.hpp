@@ -4,8 +4,10 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "ringtrack/eval/mot_accumulator.hpp"
 
@@ -18,6 +20,10 @@ struct GroundTruthObject {
   std::string class_name;
   std::int64_t points = 0;       ///< LiDAR returns that hit the object in this scan
   Eigen::Vector3d centroid_m{};  ///< centroid of those hit points, world frame
+  /// True centre of the object's body when known (NaN: unknown, the centroid stands in); only
+  /// used to decide whether the object moves (moving_objects()).
+  Eigen::Vector3d true_center_m{
+      Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN())};
 };
 
 /// One hypothesis in one scan (a row of tracks.csv).
@@ -40,20 +46,38 @@ struct TrackingEvalOptions {
   /// False (paper mode): only hypotheses flagged dynamic in at least one scan are evaluated, in
   /// all their scans. True: every hypothesis.
   bool all_hypotheses = false;
+  /// For the "moving objects only" figures: an object moves when its horizontal position leaves
+  /// the disc of this radius around its first position (metres, >= 0).
+  double moving_radius_m = 1.0;
 };
 
 /// Metrics of one sequence plus what the filters left out.
 struct TrackingEvalResult {
   MotSummary summary;
-  std::int64_t gt_rows_used = 0;          ///< ground-truth rows that passed class and min_points
-  std::int64_t gt_rows_skipped = 0;       ///< rows of another class or with too few points
-  std::int64_t hypotheses_total = 0;      ///< distinct track ids in the input
+  /// The same tracks against ground truth restricted to objects that move: objects that never
+  /// move are don't-care (not counted; a hypothesis matched to one is neither TP nor FP).
+  MotSummary moving_only;
+  std::int64_t moving_objects = 0;    ///< evaluated object ids that move (counted in moving_only)
+  std::int64_t still_objects = 0;     ///< evaluated object ids that never move (don't-care there)
+  std::int64_t gt_rows_used = 0;      ///< ground-truth rows that passed class and min_points
+  std::int64_t gt_rows_skipped = 0;   ///< rows of another class or with too few points
+  std::int64_t hypotheses_total = 0;  ///< distinct track ids in the input
   std::int64_t hypotheses_evaluated = 0;  ///< distinct track ids kept (paper mode: ever dynamic)
 };
 
+/// Ids (ascending) of the objects whose horizontal (x-y) position is ever farther than radius_m
+/// from their first position. The position of a row is its true centre when finite, else its
+/// centroid when it has hit points, else the row is skipped; "first" = the lowest scan with a
+/// position. Rows of every class and any number of points count. Throws core::InputError for a
+/// negative or non-finite radius.
+[[nodiscard]] std::vector<std::int64_t> moving_objects(
+    std::span<const GroundTruthObject> ground_truth, double radius_m);
+
 /// Evaluates tracks against ground truth scan by scan (scans in increasing order, ids in
 /// increasing order within a scan). Throws core::InputError for duplicate (scan, id) pairs,
-/// non-finite positions or min_points < 1.
+/// non-finite positions, min_points < 1 or a bad moving radius. Fills the full figures
+/// (summary) and the moving-objects-only figures (moving_only); offsets (horizontal MOTP,
+/// vertical error) are hypothesis minus object position.
 [[nodiscard]] TrackingEvalResult evaluate_tracks(std::span<const GroundTruthObject> ground_truth,
                                                  std::span<const TrackObservation> tracks,
                                                  const TrackingEvalOptions& options = {});

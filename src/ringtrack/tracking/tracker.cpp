@@ -119,6 +119,19 @@ Eigen::Matrix3d Tracker::measurement_covariance(const core::Detection& detection
   return floored_covariance(detection.covariance, config_.measurement_covariance_scale);
 }
 
+Eigen::Matrix3d Tracker::update_covariance(const core::Detection& detection) const {
+  if (config_.centroid_noise_m <= 0.0) return measurement_covariance(detection);
+  // The centroid of n points is known far better than the spread of the points: its standard
+  // error is the spread over sqrt(n). What moves it beyond that (limb swing, a partial view) is
+  // the centroid noise. The ground truth of the evaluation is a centroid too, so a filter fed
+  // the point spread lagged behind it (docs/tracking.md, "Measurement noise").
+  const double n = static_cast<double>(std::max<std::size_t>(1, detection.indices.size()));
+  Eigen::Matrix3d r = detection.covariance.cast<double>() / n;
+  r = 0.5 * (r + r.transpose()).eval();
+  r.diagonal().array() += config_.centroid_noise_m * config_.centroid_noise_m;
+  return floored_covariance(r.cast<float>(), 1.0);
+}
+
 double Tracker::pair_cost(const Hypothesis& hypothesis, const core::Detection& detection) const {
   return pair_cost_terms(
       config_, gate(), make_gaussian_term(hypothesis.position(), hypothesis.position_covariance()),
@@ -155,7 +168,11 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
   stats_ = {};
 
   measurement_r_.clear();
-  for (const auto& d : detections) measurement_r_.push_back(measurement_covariance(d));
+  update_r_.clear();
+  for (const auto& d : detections) {
+    measurement_r_.push_back(measurement_covariance(d));
+    update_r_.push_back(update_covariance(d));
+  }
   predict_all(dt);
   assign(detections);
   detection_used_.assign(detections.size(), 0);
@@ -223,7 +240,7 @@ void Tracker::assign(const std::vector<core::Detection>& detections) {
 }
 
 void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
-  h.filter.update(d.centroid.cast<double>(), measurement_r_[index]);
+  h.filter.update(d.centroid.cast<double>(), update_r_[index]);
   if (config_.vertical_motion == core::VerticalMotion::kConstantPosition) {
     h.filter.hold_vertical_velocity();
   }
@@ -338,14 +355,15 @@ void Tracker::classify(Hypothesis& h) const {
   }
 }
 
-int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r,
-                                double dt_s, int updates) {
+int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r_create,
+                                const Eigen::Matrix3d& r_update, double dt_s, int updates) {
   const bool flat = config.vertical_motion == core::VerticalMotion::kConstantPosition;
-  ConstantVelocityKalman filter(Eigen::Vector3d::Zero(), r, config.initial_velocity_stddev_mps);
+  ConstantVelocityKalman filter(Eigen::Vector3d::Zero(), r_create,
+                                config.initial_velocity_stddev_mps);
   if (flat) filter.hold_vertical_velocity();
   for (int u = 0; u < updates; ++u) {
     predict_filter(config, filter, dt_s);
-    filter.update(Eigen::Vector3d::Zero(), r);
+    filter.update(Eigen::Vector3d::Zero(), r_update);
     if (flat) filter.hold_vertical_velocity();
   }
   constexpr int kLimit = 1000000;

@@ -91,8 +91,12 @@ class Tracker {
                                  const core::Detection& detection) const;
   /// The gate of the configured cost.
   [[nodiscard]] double gate() const;
-  /// Measurement noise the filter uses for a detection (scaled covariance, symmetric, floored).
+  /// Position uncertainty of a detection in the assignment cost (scaled covariance, symmetric,
+  /// floored): the object's extent, so that a partial view of it still pairs.
   [[nodiscard]] Eigen::Matrix3d measurement_covariance(const core::Detection& detection) const;
+  /// Measurement noise of the Kalman update with a detection: the standard error of its
+  /// centroid plus centroid_noise_m per axis (the association covariance when that is 0).
+  [[nodiscard]] Eigen::Matrix3d update_covariance(const core::Detection& detection) const;
 
  private:
   void predict_all(double dt_s);
@@ -109,7 +113,8 @@ class Tracker {
   double min_speed_mps_;
   double max_speed_mps_;
   std::vector<Hypothesis> hypotheses_;
-  std::vector<Eigen::Matrix3d> measurement_r_;  // per detection of the current update
+  std::vector<Eigen::Matrix3d> measurement_r_;  // association noise per detection of the update
+  std::vector<Eigen::Matrix3d> update_r_;       // Kalman update noise per detection
   std::vector<GaussianTerm> h_terms_, d_terms_;
   std::vector<int> col_of_row_;
   std::vector<char> detection_used_;
@@ -120,11 +125,12 @@ class Tracker {
   TrackerStats stats_;
 };
 
-/// Scans a hypothesis created from one detection with covariance r survives without further
-/// detections at scan period dt_s when it had `updates` more detections one period apart, by
-/// running the filter alone: the number of predictions after the last update until the largest
-/// position-covariance eigenvalue exceeds delete_eigenvalue_m2 (the deletion scan counts).
-int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r,
-                                double dt_s, int updates);
+/// Scans a hypothesis created from one detection with covariance r_create survives without
+/// further detections at scan period dt_s when it had `updates` more detections one period
+/// apart, each with update noise r_update, by running the filter alone: the number of
+/// predictions after the last update until the largest position-covariance eigenvalue exceeds
+/// delete_eigenvalue_m2 (the deletion scan counts).
+int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r_create,
+                                const Eigen::Matrix3d& r_update, double dt_s, int updates);
 
 }  // namespace ringtrack::tracking

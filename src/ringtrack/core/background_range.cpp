@@ -1,0 +1,168 @@
+#include "ringtrack/core/background_range.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+
+#include "ringtrack/core/error.hpp"
+
+namespace ringtrack::core {
+namespace {
+
+constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
+constexpr float kInf = std::numeric_limits<float>::infinity();
+constexpr int kMaxStreak = 60000;  // fits uint16
+
+void require(bool ok, const char* key, const std::string& expected, double value) {
+  if (!ok) {
+    throw ConfigError(std::string("background range: ") + key + " must be " + expected + ", got " +
+                      std::to_string(value));
+  }
+}
+
+}  // namespace
+
+BackgroundRangeModel::BackgroundRangeModel(const SensorModel& model,
+                                           const BackgroundRangeConfig& config)
+    : config_(config),
+      rings_(model.rings()),
+      bins_(model.columns()),
+      bin_width_rad_(model.azimuth_step_rad()) {
+  model.validate();
+  require(config.tolerance_m >= 0.0 && std::isfinite(config.tolerance_m), "tolerance_m",
+          "a finite number >= 0", config.tolerance_m);
+  require(config.relative_tolerance >= 0.0 && config.relative_tolerance < 1.0, "relative_tolerance",
+          "in [0, 1)", config.relative_tolerance);
+  require(config.scans_to_learn >= 1 && config.scans_to_learn <= kMaxStreak, "scans_to_learn",
+          "in [1, 60000]", config.scans_to_learn);
+  require(config.scans_to_learn_behind >= 1 && config.scans_to_learn_behind <= kMaxStreak,
+          "scans_to_learn_behind", "in [1, 60000]", config.scans_to_learn_behind);
+  require(config.smoothing >= 0.0 && config.smoothing <= 1.0, "smoothing", "in [0, 1]",
+          config.smoothing);
+  reset();
+}
+
+void BackgroundRangeModel::reset() {
+  const auto n = static_cast<std::size_t>(rings_) * static_cast<std::size_t>(bins_);
+  background_.assign(n, kNaN);
+  candidate_.assign(n, kNaN);
+  streak_.assign(n, 0);
+  bin_scan_.assign(static_cast<std::size_t>(bins_), -1);
+  scans_ = 0;
+}
+
+int BackgroundRangeModel::bin_of(double azimuth_rad) const {
+  constexpr double kTwoPi = 2.0 * std::numbers::pi;
+  double a = std::fmod(azimuth_rad, kTwoPi);
+  if (a < 0.0) a += kTwoPi;
+  const auto b = static_cast<long>(std::floor(a / bin_width_rad_ + 0.5));
+  return static_cast<int>(b % bins_);
+}
+
+std::size_t BackgroundRangeModel::cell_of(const OrganizedScan& scan, std::size_t scan_index) const {
+  const int ring = scan.ring_of(scan_index);
+  const int column = scan.column_of(scan_index);
+  const int bin = bin_of(scan.column_azimuth_rad[static_cast<std::size_t>(column)]);
+  return static_cast<std::size_t>(ring) * static_cast<std::size_t>(bins_) +
+         static_cast<std::size_t>(bin);
+}
+
+void BackgroundRangeModel::update(const OrganizedScan& scan) {
+  if (scan.rings() != rings_) {
+    throw InputError("background range: the scan has " + std::to_string(scan.rings()) +
+                     " rings, the model " + std::to_string(rings_));
+  }
+  if (scan.column_azimuth_rad.size() != static_cast<std::size_t>(scan.columns())) {
+    throw InputError("background range: the scan has " + std::to_string(scan.columns()) +
+                     " columns but " + std::to_string(scan.column_azimuth_rad.size()) +
+                     " column azimuths");
+  }
+  const auto& status = scan.statuses();
+  const auto& range = scan.ranges();
+  // Bin of each column; two columns of one scan in one bin (a revolution of 1809 firing
+  // sequences): the first wins, the other is skipped (-1).
+  column_bin_.resize(static_cast<std::size_t>(scan.columns()));
+  for (int c = 0; c < scan.columns(); ++c) {
+    const double az = scan.column_azimuth_rad[static_cast<std::size_t>(c)];
+    int bin = -1;
+    if (std::isfinite(az)) {
+      bin = bin_of(az);
+      if (bin_scan_[static_cast<std::size_t>(bin)] == scans_) {
+        bin = -1;
+      } else {
+        bin_scan_[static_cast<std::size_t>(bin)] = scans_;
+      }
+    }
+    column_bin_[static_cast<std::size_t>(c)] = bin;
+  }
+  for (int r = 0; r < rings_; ++r) {
+    const std::size_t row = static_cast<std::size_t>(r) * static_cast<std::size_t>(bins_);
+    for (int c = 0; c < scan.columns(); ++c) {
+      const int bin = column_bin_[static_cast<std::size_t>(c)];
+      if (bin < 0) continue;
+      const auto i = scan.index(r, c);
+      const std::size_t cell = row + static_cast<std::size_t>(bin);
+      switch (status[i]) {
+        case ReturnStatus::kValid:
+          observe(cell, range[i]);
+          break;
+        case ReturnStatus::kNoReturn:
+        case ReturnStatus::kTooFar:
+          if (config_.learn_no_return) observe(cell, kInf);
+          break;
+        case ReturnStatus::kTooClose:
+          break;  // no evidence either way
+      }
+    }
+  }
+  ++scans_;
+}
+
+void BackgroundRangeModel::observe(std::size_t cell, float range_m) {
+  const auto same = [&](float a, float b) {
+    if (std::isinf(a) || std::isinf(b)) return a == b;
+    return std::abs(a - b) <= config_.tolerance_m + config_.relative_tolerance * std::min(a, b);
+  };
+  float& bg = background_[cell];
+  float& cand = candidate_[cell];
+  std::uint16_t& streak = streak_[cell];
+  const bool learned = !std::isnan(bg);
+  if (learned && same(range_m, bg)) {
+    if (std::isfinite(bg)) bg += static_cast<float>(config_.smoothing) * (range_m - bg);
+    streak = 0;  // the background is back: a passing object's streak ends
+    return;
+  }
+  if (streak > 0 && same(range_m, cand)) {
+    if (std::isfinite(cand)) cand += (range_m - cand) / static_cast<float>(streak + 1);
+    streak = static_cast<std::uint16_t>(std::min(streak + 1, kMaxStreak));
+  } else {
+    cand = range_m;
+    streak = 1;
+  }
+  const int needed = learned && cand > bg ? config_.scans_to_learn_behind : config_.scans_to_learn;
+  if (streak >= needed) {
+    bg = cand;
+    streak = 0;
+  }
+}
+
+bool BackgroundRangeModel::is_in_front(std::size_t cell, double range_m, double margin_m) const {
+  const float bg = background_[cell];
+  if (std::isnan(bg) || !std::isfinite(range_m)) return false;
+  return std::isinf(bg) || range_m < static_cast<double>(bg) - margin_m;
+}
+
+bool BackgroundRangeModel::is_in_front(const OrganizedScan& scan, std::size_t scan_index,
+                                       double margin_m) const {
+  if (!scan.valid(scan_index)) return false;
+  return is_in_front(cell_of(scan, scan_index), scan.range_m(scan_index), margin_m);
+}
+
+std::size_t BackgroundRangeModel::learned_count() const {
+  return static_cast<std::size_t>(std::count_if(background_.begin(), background_.end(),
+                                                [](float b) { return !std::isnan(b); }));
+}
+
+}  // namespace ringtrack::core

@@ -1,0 +1,82 @@
+#pragma once
+/// Per-cell range of the static background seen by a static sensor, learned over scans.
+
+#include <cstdint>
+#include <vector>
+
+#include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/core/sensor_model.hpp"
+
+namespace ringtrack::core {
+
+/// Parameters of BackgroundRangeModel (see docs/visibility.md).
+struct BackgroundRangeConfig {
+  /// Two ranges are one surface when within tolerance_m + relative_tolerance * (nearer range).
+  double tolerance_m{0.15};
+  /// Range-proportional part of the tolerance (far returns and grazing surfaces are noisier).
+  double relative_tolerance{0.01};
+  /// Consecutive scans a range nearer than the background (or the first range) must hold to
+  /// become background: a person passing stays foreground, a parked car is learned.
+  int scans_to_learn{20};
+  /// Consecutive scans a range behind the background must hold to replace it; seeing through the
+  /// old background proves it gone, so this may be shorter.
+  int scans_to_learn_behind{5};
+  /// Weight of a return matching the background in its running average (0 freezes it).
+  double smoothing{0.05};
+  /// Whether a cell without returns (sky, kTooFar) for scans_to_learn scans learns an open
+  /// (infinite) background, in front of which any return counts.
+  bool learn_no_return{true};
+};
+
+/// Learns, per cell of a static sensor, the range of the static background. Cells are the
+/// model's grid: ring * bins + bin, bin = the column azimuth rounded to the model's azimuth step,
+/// so scans with a varying column count or start azimuth (real captures) update the same cells;
+/// scans made with OrganizedScan::set_uniform_columns have cell == scan index.
+class BackgroundRangeModel {
+ public:
+  /// An empty model for the sensor; throws ConfigError naming the parameter when out of range.
+  explicit BackgroundRangeModel(const SensorModel& model, const BackgroundRangeConfig& config = {});
+
+  /// Adds one scan (taken from the same static pose). Throws InputError on a ring-count mismatch.
+  void update(const OrganizedScan& scan);
+  /// Learned background range of a cell: NaN when not learned, +infinity when learned open.
+  [[nodiscard]] float background_range(std::size_t cell) const { return background_[cell]; }
+  /// True when range_m lies more than margin_m in front of the cell's learned background
+  /// (evidence of a new object); false when nothing is learned.
+  [[nodiscard]] bool is_in_front(std::size_t cell, double range_m, double margin_m) const;
+  /// The model cell of a scan cell (by ring and column azimuth).
+  [[nodiscard]] std::size_t cell_of(const OrganizedScan& scan, std::size_t scan_index) const;
+  /// is_in_front for a scan cell's own return (false for invalid cells).
+  [[nodiscard]] bool is_in_front(const OrganizedScan& scan, std::size_t scan_index,
+                                 double margin_m) const;
+
+  /// Number of rings.
+  [[nodiscard]] int rings() const { return rings_; }
+  /// Number of azimuth bins per ring.
+  [[nodiscard]] int bins() const { return bins_; }
+  /// Number of cells (rings * bins).
+  [[nodiscard]] std::size_t size() const { return background_.size(); }
+  /// Scans added so far.
+  [[nodiscard]] std::int64_t scans() const { return scans_; }
+  /// Cells with a learned background (finite or open).
+  [[nodiscard]] std::size_t learned_count() const;
+  /// Forgets everything learned.
+  void reset();
+
+ private:
+  [[nodiscard]] int bin_of(double azimuth_rad) const;
+  void observe(std::size_t cell, float range_m);
+
+  BackgroundRangeConfig config_;
+  int rings_;
+  int bins_;
+  double bin_width_rad_;
+  std::int64_t scans_{0};
+  std::vector<float> background_;  // NaN: not learned; +inf: open
+  std::vector<float> candidate_;   // mean of the current streak of consistent ranges
+  std::vector<std::uint16_t> streak_;
+  std::vector<std::int64_t> bin_scan_;  // last scan that wrote each bin (one column per bin)
+  std::vector<int> column_bin_;         // scratch: bin of each column of the current scan
+};
+
+}  // namespace ringtrack::core

@@ -1,0 +1,433 @@
+#include "ringtrack/core/visibility.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <numeric>
+#include <string>
+
+#include "ringtrack/core/error.hpp"
+
+namespace ringtrack::core {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+// Angular slack when choosing candidate beams for a box: the exact slab test decides, so this
+// only has to exceed the rounding of the bounds (~1e-15 rad).
+constexpr double kSlackRad = 1e-9;
+
+double wrap_two_pi(double a) {
+  double w = std::fmod(a, kTwoPi);
+  if (w < 0.0) w += kTwoPi;
+  if (w >= kTwoPi) w -= kTwoPi;  // -1e-20 + 2 pi rounds to 2 pi
+  return w;
+}
+
+Visibility classify(ReturnStatus status, double range_m, double entry_m, double exit_m,
+                    double margin_m) {
+  switch (status) {
+    case ReturnStatus::kValid:
+      if (range_m > exit_m + margin_m) return Visibility::kFree;
+      if (range_m < entry_m - margin_m) return Visibility::kOccluded;
+      return Visibility::kOccupied;
+    case ReturnStatus::kNoReturn:
+    case ReturnStatus::kTooFar:
+      return Visibility::kNoReturn;
+    case ReturnStatus::kTooClose:
+      break;
+  }
+  return Visibility::kUnknown;
+}
+
+void check_margin(double margin_m) {
+  if (!(margin_m >= 0.0) || !std::isfinite(margin_m)) {
+    throw Error("visibility query: margin must be a finite number >= 0 m, got " +
+                std::to_string(margin_m));
+  }
+}
+
+// Slab test of the half-line o + t d (t >= 0) against [lo, hi]; entry/exit distances on a hit.
+bool ray_box(const Eigen::Vector3d& o, const Eigen::Vector3d& d, const Eigen::Vector3d& lo,
+             const Eigen::Vector3d& hi, double& entry, double& exit) {
+  double t0 = 0.0;
+  double t1 = std::numeric_limits<double>::infinity();
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0.0) {
+      if (o[k] < lo[k] || o[k] > hi[k]) return false;
+      continue;
+    }
+    const double inv = 1.0 / d[k];
+    double a = (lo[k] - o[k]) * inv;
+    double b = (hi[k] - o[k]) * inv;
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+    if (t0 > t1) return false;
+  }
+  entry = t0;
+  exit = t1;
+  return true;
+}
+
+double segment_distance_xy(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  const Eigen::Vector2d pa = a.head<2>();
+  const Eigen::Vector2d ab = b.head<2>() - pa;
+  const double len2 = ab.squaredNorm();
+  if (len2 == 0.0) return pa.norm();
+  const double t = std::clamp(-pa.dot(ab) / len2, 0.0, 1.0);
+  return (pa + t * ab).norm();
+}
+
+}  // namespace
+
+const char* to_string(Visibility v) {
+  switch (v) {
+    case Visibility::kFree:
+      return "free";
+    case Visibility::kOccupied:
+      return "occupied";
+    case Visibility::kOccluded:
+      return "occluded";
+    case Visibility::kNoReturn:
+      return "no_return";
+    case Visibility::kUnknown:
+      break;
+  }
+  return "unknown";
+}
+
+void VisibilityCounts::add(Visibility v) {
+  switch (v) {
+    case Visibility::kFree:
+      ++free;
+      break;
+    case Visibility::kOccupied:
+      ++occupied;
+      break;
+    case Visibility::kOccluded:
+      ++occluded;
+      break;
+    case Visibility::kNoReturn:
+      ++no_return;
+      break;
+    case Visibility::kUnknown:
+      ++unknown;
+      break;
+  }
+}
+
+VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& model,
+                                 const Pose& pose)
+    : scan_(&scan), rings_(scan.rings()), columns_(scan.columns()) {
+  model.validate();
+  if (scan.rings() != model.rings() || scan.columns() <= 0) {
+    throw InputError("visibility query: the scan has " + std::to_string(scan.rings()) + " x " +
+                     std::to_string(scan.columns()) + " cells but sensor model '" + model.name +
+                     "' has " + std::to_string(model.rings()) + " rings");
+  }
+  if (scan.column_azimuth_rad.size() != static_cast<std::size_t>(columns_)) {
+    throw InputError("visibility query: the scan has " + std::to_string(columns_) +
+                     " columns but " + std::to_string(scan.column_azimuth_rad.size()) +
+                     " column azimuths");
+  }
+  for (std::size_t c = 0; c < scan.column_azimuth_rad.size(); ++c) {
+    if (!std::isfinite(scan.column_azimuth_rad[c])) {
+      throw InputError("visibility query: column " + std::to_string(c) +
+                       " has a non-finite azimuth");
+    }
+  }
+  if (!pose.translation.allFinite() || !pose.rotation.coeffs().allFinite() ||
+      !(pose.rotation.norm() > 0.0)) {
+    throw InputError("visibility query: the sensor pose at stamp " + std::to_string(pose.stamp_ns) +
+                     " ns is not finite (translation or rotation holds NaN/inf, or a zero "
+                     "quaternion)");
+  }
+  const Eigen::Isometry3d world_T_sensor = pose.isometry();
+  world_R_sensor_ = world_T_sensor.linear();
+  world_t_sensor_ = world_T_sensor.translation();
+  sensor_R_world_ = world_R_sensor_.transpose();
+  sensor_t_world_ = -(sensor_R_world_ * world_t_sensor_);
+
+  // Rings: acceptance band of half the gap to each neighbour; a nominal (mean) gap at the ends.
+  const auto nr = static_cast<std::size_t>(rings_);
+  elevation_rad_ = model.elevation_rad;
+  offset_m_ = model.vertical_offset_m;
+  az_offset_rad_ = model.azimuth_offset_rad;
+  const double nominal_gap = rings_ > 1
+                                 ? (elevation_rad_.back() - elevation_rad_.front()) / (rings_ - 1)
+                                 : model.azimuth_step_rad();
+  cos_el_.resize(nr);
+  sin_el_.resize(nr);
+  cos_az_off_.resize(nr);
+  sin_az_off_.resize(nr);
+  accept_below_rad_.resize(nr);
+  accept_above_rad_.resize(nr);
+  for (std::size_t r = 0; r < nr; ++r) {
+    cos_el_[r] = std::cos(elevation_rad_[r]);
+    sin_el_[r] = std::sin(elevation_rad_[r]);
+    cos_az_off_[r] = std::cos(az_offset_rad_[r]);
+    sin_az_off_[r] = std::sin(az_offset_rad_[r]);
+    accept_below_rad_[r] = 0.5 * (r == 0 ? nominal_gap : elevation_rad_[r] - elevation_rad_[r - 1]);
+    accept_above_rad_[r] =
+        0.5 * (r + 1 == nr ? nominal_gap : elevation_rad_[r + 1] - elevation_rad_[r]);
+  }
+  offset_min_m_ = *std::min_element(offset_m_.begin(), offset_m_.end());
+  offset_max_m_ = *std::max_element(offset_m_.begin(), offset_m_.end());
+
+  // Columns: sorted wrapped azimuths (any order or wrap of the capture), nominal step, buckets.
+  const auto nc = static_cast<std::size_t>(columns_);
+  cos_az_.resize(nc);
+  sin_az_.resize(nc);
+  std::vector<std::pair<double, int>> order(nc);
+  std::size_t smallest = 0;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const double az = scan.column_azimuth_rad[c];
+    cos_az_[c] = std::cos(az);
+    sin_az_[c] = std::sin(az);
+    order[c] = {wrap_two_pi(az), static_cast<int>(c)};
+    if (order[c] < order[smallest]) smallest = c;
+  }
+  // A capture's azimuths ascend modulo 2 pi: starting at the smallest they are usually sorted
+  // already, which saves the sort.
+  std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(smallest), order.end());
+  if (!std::is_sorted(order.begin(), order.end())) std::sort(order.begin(), order.end());
+  sorted_az_.resize(nc);
+  sorted_column_.resize(nc);
+  for (std::size_t i = 0; i < nc; ++i) {
+    sorted_az_[i] = order[i].first;
+    sorted_column_[i] = order[i].second;
+  }
+  if (nc > 1) {
+    std::vector<double> gaps;
+    gaps.reserve(nc);
+    for (std::size_t i = 0; i < nc; ++i) {
+      const double next = i + 1 < nc ? sorted_az_[i + 1] : sorted_az_[0] + kTwoPi;
+      if (next - sorted_az_[i] > 0.0) gaps.push_back(next - sorted_az_[i]);
+    }
+    auto mid = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
+    std::nth_element(gaps.begin(), mid, gaps.end());
+    nominal_step_rad_ = *mid;
+  } else {
+    nominal_step_rad_ = model.azimuth_step_rad();
+  }
+  const std::size_t buckets = 4 * nc;
+  bucket_.resize(buckets);
+  std::size_t first = 0;  // lower bound of each bucket's start, found by one merge-like pass
+  for (std::size_t b = 0; b < buckets; ++b) {
+    const double start = kTwoPi * static_cast<double>(b) / static_cast<double>(buckets);
+    while (first < nc && sorted_az_[first] < start) ++first;
+    bucket_[b] = static_cast<int>(first);
+  }
+}
+
+std::optional<int> VisibilityQuery::column_of_azimuth(double azimuth_rad) const {
+  if (!std::isfinite(azimuth_rad)) return std::nullopt;
+  const double a = wrap_two_pi(azimuth_rad);
+  const int n = columns_;
+  const auto nb = bucket_.size();
+  const auto b = std::min(nb - 1, static_cast<std::size_t>(a / kTwoPi * static_cast<double>(nb)));
+  // j becomes the first sorted index whose azimuth exceeds a; the walks make the bucket's
+  // rounding irrelevant, so this equals upper_bound.
+  int j = bucket_[b];
+  while (j > 0 && sorted_az_[static_cast<std::size_t>(j - 1)] > a) --j;
+  while (j < n && sorted_az_[static_cast<std::size_t>(j)] <= a) ++j;
+  const int lo = j == 0 ? n - 1 : j - 1;
+  const int hi = j == n ? 0 : j;
+  const double az_lo = sorted_az_[static_cast<std::size_t>(lo)] - (j == 0 ? kTwoPi : 0.0);
+  const double az_hi = sorted_az_[static_cast<std::size_t>(hi)] + (j == n ? kTwoPi : 0.0);
+  const double below = a - az_lo;
+  const double above = az_hi - a;
+  int pick = -1;
+  if (az_hi - az_lo <= 2.0 * nominal_step_rad_) {
+    pick = below <= above ? lo : hi;
+  } else if (below <= 0.5 * nominal_step_rad_) {
+    pick = lo;  // a gap (dropped packets, partial revolution): half a step from its ends
+  } else if (above <= 0.5 * nominal_step_rad_) {
+    pick = hi;
+  }
+  if (pick < 0) return std::nullopt;
+  return sorted_column_[static_cast<std::size_t>(pick)];
+}
+
+std::optional<int> VisibilityQuery::ring_of_sensor_point(const Eigen::Vector3d& p) const {
+  if (!p.allFinite()) return std::nullopt;
+  const double rho = std::hypot(p.x(), p.y());
+  // Elevation seen from the middle beam origin bounds the elevation seen from every ring's
+  // origin (at most half_spread away): only rings whose band meets that bound are evaluated.
+  const double mid = 0.5 * (offset_min_m_ + offset_max_m_);
+  const double half_spread = 0.5 * (offset_max_m_ - offset_min_m_);
+  const double dist = std::hypot(rho, p.z() - mid);
+  double lo_e = -std::numbers::pi;
+  double hi_e = std::numbers::pi;
+  if (dist > 2.0 * half_spread && dist > 0.0) {
+    const double e = std::atan2(p.z() - mid, rho);
+    const double delta = std::asin(half_spread / (dist - half_spread)) + kSlackRad;
+    lo_e = e - delta;
+    hi_e = e + delta;
+  }
+  int best = -1;
+  double best_dev = std::numeric_limits<double>::infinity();
+  for (int r = 0; r < rings_; ++r) {
+    const auto i = static_cast<std::size_t>(r);
+    if (elevation_rad_[i] + accept_above_rad_[i] < lo_e) continue;
+    if (elevation_rad_[i] - accept_below_rad_[i] > hi_e) break;
+    const double dz = p.z() - offset_m_[i];
+    if (rho == 0.0 && dz == 0.0) continue;  // the point is the beam origin
+    const double dev = std::atan2(dz, rho) - elevation_rad_[i];
+    if (dev < -accept_below_rad_[i] || dev > accept_above_rad_[i]) continue;
+    if (std::abs(dev) < best_dev) {
+      best_dev = std::abs(dev);
+      best = r;
+    }
+  }
+  if (best < 0) return std::nullopt;
+  return best;
+}
+
+std::optional<VisibilityQuery::Located> VisibilityQuery::locate(
+    const Eigen::Vector3d& world_point) const {
+  const Eigen::Vector3d p = sensor_R_world_ * world_point + sensor_t_world_;
+  const auto ring = ring_of_sensor_point(p);
+  if (!ring) return std::nullopt;
+  const auto r = static_cast<std::size_t>(*ring);
+  const auto column = column_of_azimuth(std::atan2(p.y(), p.x()) - az_offset_rad_[r]);
+  if (!column) return std::nullopt;
+  return Located{*ring, *column, std::hypot(p.x(), p.y(), p.z() - offset_m_[r])};
+}
+
+std::optional<std::size_t> VisibilityQuery::cell_of(const Eigen::Vector3d& world_point) const {
+  const auto loc = locate(world_point);
+  if (!loc) return std::nullopt;
+  return scan_->index(loc->ring, loc->column);
+}
+
+std::optional<double> VisibilityQuery::beam_distance(const Eigen::Vector3d& world_point) const {
+  const auto loc = locate(world_point);
+  if (!loc) return std::nullopt;
+  return loc->distance_m;
+}
+
+Visibility VisibilityQuery::at(const Eigen::Vector3d& world_point, double margin_m) const {
+  check_margin(margin_m);
+  const auto loc = locate(world_point);
+  if (!loc) return Visibility::kUnknown;
+  const auto i = scan_->index(loc->ring, loc->column);
+  return classify(scan_->status(i), scan_->range_m(i), loc->distance_m, loc->distance_m, margin_m);
+}
+
+BeamRay VisibilityQuery::cell_ray(int ring, int column) const {
+  const auto r = static_cast<std::size_t>(ring);
+  const auto c = static_cast<std::size_t>(column);
+  // cos/sin of (column azimuth + ring azimuth offset) by the angle-sum identities.
+  const double ca = cos_az_[c] * cos_az_off_[r] - sin_az_[c] * sin_az_off_[r];
+  const double sa = sin_az_[c] * cos_az_off_[r] + cos_az_[c] * sin_az_off_[r];
+  const Eigen::Vector3d d(cos_el_[r] * ca, cos_el_[r] * sa, sin_el_[r]);
+  return {world_R_sensor_.col(2) * offset_m_[r] + world_t_sensor_, world_R_sensor_ * d};
+}
+
+template <typename Visit>
+void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& visit) const {
+  check_margin(margin_m);
+  if (world_box.empty() || !world_box.min.allFinite() || !world_box.max.allFinite()) return;
+  const Eigen::Vector3d lo = world_box.min.cast<double>();
+  const Eigen::Vector3d hi = world_box.max.cast<double>();
+
+  // The box's corners in the sensor frame bound the beams that can reach it.
+  std::array<Eigen::Vector3d, 8> corner;
+  std::array<double, 8> corner_az{};
+  double z_min = std::numeric_limits<double>::infinity();
+  double z_max = -z_min;
+  double rho_max = 0.0;
+  for (int k = 0; k < 8; ++k) {
+    const Eigen::Vector3d w((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(),
+                            (k & 4) ? hi.z() : lo.z());
+    const auto ku = static_cast<std::size_t>(k);
+    corner[ku] = sensor_R_world_ * w + sensor_t_world_;
+    corner_az[ku] = wrap_two_pi(std::atan2(corner[ku].y(), corner[ku].x()));
+    z_min = std::min(z_min, corner[ku].z());
+    z_max = std::max(z_max, corner[ku].z());
+    rho_max = std::max(rho_max, corner[ku].head<2>().norm());
+  }
+  // Azimuth span: the complement of the widest gap between corner azimuths. A widest gap of at
+  // most pi means the sensor's z axis meets the box's footprint: every azimuth.
+  std::array<double, 8> sorted = corner_az;
+  std::sort(sorted.begin(), sorted.end());
+  double widest = sorted[0] + kTwoPi - sorted[7];
+  double az_start = sorted[0];
+  for (std::size_t k = 0; k + 1 < 8; ++k) {
+    if (sorted[k + 1] - sorted[k] > widest) {
+      widest = sorted[k + 1] - sorted[k];
+      az_start = sorted[k + 1];
+    }
+  }
+  const bool all_azimuths = widest <= std::numbers::pi;
+  const double az_span = kTwoPi - widest;
+  // Nearest horizontal distance of the box to the z axis: its footprint's boundary lies on the
+  // projected edges.
+  double rho_min = 0.0;
+  if (!all_azimuths) {
+    rho_min = std::numeric_limits<double>::infinity();
+    for (int k = 0; k < 8; ++k) {
+      for (int bit : {1, 2, 4}) {
+        if (k & bit) continue;
+        rho_min = std::min(rho_min, segment_distance_xy(corner[static_cast<std::size_t>(k)],
+                                                        corner[static_cast<std::size_t>(k | bit)]));
+      }
+    }
+  }
+  // Elevation band over every beam origin (the lowest origin sees the box highest).
+  const double dz_hi = z_max - offset_min_m_;
+  const double dz_lo = z_min - offset_max_m_;
+  const double el_max = std::atan2(dz_hi, dz_hi > 0.0 ? rho_min : rho_max) + kSlackRad;
+  const double el_min = std::atan2(dz_lo, dz_lo < 0.0 ? rho_min : rho_max) - kSlackRad;
+
+  const auto n = sorted_az_.size();
+  for (int r = 0; r < rings_; ++r) {
+    const auto ri = static_cast<std::size_t>(r);
+    if (elevation_rad_[ri] < el_min) continue;
+    if (elevation_rad_[ri] > el_max) break;
+    std::size_t first = 0;
+    std::size_t count = n;
+    double start = 0.0;
+    double span = kTwoPi;
+    if (!all_azimuths) {
+      start = wrap_two_pi(az_start - az_offset_rad_[ri] - kSlackRad);
+      span = az_span + 2.0 * kSlackRad;
+      first = static_cast<std::size_t>(
+          std::lower_bound(sorted_az_.begin(), sorted_az_.end(), start) - sorted_az_.begin());
+    }
+    for (std::size_t k = 0; k < count; ++k) {
+      const std::size_t s = (first + k) % n;
+      if (!all_azimuths) {
+        double off = sorted_az_[s] - start;
+        if (off < 0.0) off += kTwoPi;
+        if (off > span) break;
+      }
+      const int column = sorted_column_[s];
+      const BeamRay ray = cell_ray(r, column);
+      double entry = 0.0;
+      double exit = 0.0;
+      if (!ray_box(ray.origin, ray.direction, lo, hi, entry, exit)) continue;
+      const auto i = scan_->index(r, column);
+      visit(i, classify(scan_->status(i), scan_->range_m(i), entry, exit, margin_m), entry, exit);
+    }
+  }
+}
+
+VisibilityCounts VisibilityQuery::in_box(const Box3& world_box, double margin_m) const {
+  VisibilityCounts counts;
+  visit_box(world_box, margin_m, [&](std::size_t, Visibility v, double, double) { counts.add(v); });
+  return counts;
+}
+
+void VisibilityQuery::cells_in_box(const Box3& world_box, double margin_m,
+                                   std::vector<BoxBeam>& out) const {
+  out.clear();
+  visit_box(world_box, margin_m, [&](std::size_t i, Visibility v, double entry, double exit) {
+    out.push_back({i, v, entry, exit});
+  });
+}
+
+}  // namespace ringtrack::core

@@ -1,0 +1,124 @@
+#pragma once
+/// Visibility queries: what one organized scan says about a world point or a world box (seen
+/// free, occupied, occluded, no return, unknown). See docs/visibility.md.
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include "ringtrack/core/box3.hpp"
+#include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/core/pose.hpp"
+#include "ringtrack/core/sensor_model.hpp"
+
+namespace ringtrack::core {
+
+/// What a scan says about a point (or about the part of a beam inside a box).
+enum class Visibility : std::uint8_t {
+  kUnknown = 0,   ///< outside the field of view, between columns of a gap, or a too-close return
+  kFree = 1,      ///< the beam ends beyond it by more than the margin
+  kOccupied = 2,  ///< the beam ends at it (within the margin)
+  kOccluded = 3,  ///< the beam ends before it by more than the margin
+  kNoReturn = 4,  ///< the beam returned nothing (kNoReturn or kTooFar): sky, or absorbing surface
+};
+
+/// Short lower-case name ("free", "occupied", ...).
+[[nodiscard]] const char* to_string(Visibility v);
+
+/// Number of beams of each kind.
+struct VisibilityCounts {
+  int free = 0;       ///< beams ending beyond the box
+  int occupied = 0;   ///< beams ending inside the box
+  int occluded = 0;   ///< beams ending before the box
+  int no_return = 0;  ///< beams through the box without a return
+  int unknown = 0;    ///< beams through the box with a too-close return
+  /// Sum of all kinds.
+  [[nodiscard]] int total() const { return free + occupied + occluded + no_return + unknown; }
+  /// Adds one beam of kind v.
+  void add(Visibility v);
+  /// Field-wise equality.
+  friend bool operator==(const VisibilityCounts&, const VisibilityCounts&) = default;
+};
+
+/// A cell's beam in the world frame: origin (the ring's beam origin) and unit direction.
+struct BeamRay {
+  Eigen::Vector3d origin;     ///< world position of the beam origin
+  Eigen::Vector3d direction;  ///< unit direction in the world
+};
+
+/// One beam through a box: its cell, its verdict and where it enters and leaves the box.
+struct BoxBeam {
+  std::size_t cell{0};                          ///< scan index ring * columns + column
+  Visibility visibility{Visibility::kUnknown};  ///< verdict of the beam about the box
+  double entry_m{0.0};                          ///< distance from the beam origin to the box entry
+  double exit_m{0.0};                           ///< distance from the beam origin to the box exit
+};
+
+/// Answers visibility questions about world points and boxes from one organized scan taken at a
+/// pose (sensor in world). Holds a reference to the scan, which must outlive the query.
+/// Construction is O(columns log columns); queries do not allocate (except cells_in_box's output).
+class VisibilityQuery {
+ public:
+  /// Precomputes world->sensor, per-ring beam geometry and the column lookup. Throws InputError
+  /// when the scan does not match the model (rings, column azimuths) or the pose is not finite.
+  VisibilityQuery(const OrganizedScan& scan, const SensorModel& model, const Pose& pose);
+
+  /// Verdict of the scan about one world point; margin_m >= 0 is the range tolerance in metres.
+  [[nodiscard]] Visibility at(const Eigen::Vector3d& world_point, double margin_m) const;
+  /// The cell whose beam passes closest to the point (nearest ring elevation, nearest column
+  /// azimuth), or nothing when the point lies outside the field of view.
+  [[nodiscard]] std::optional<std::size_t> cell_of(const Eigen::Vector3d& world_point) const;
+  /// Distance from the point to the beam origin of the ring of cell_of (nothing outside the FOV).
+  [[nodiscard]] std::optional<double> beam_distance(const Eigen::Vector3d& world_point) const;
+  /// Verdicts of every beam that passes through the box (rays are half-lines from their origin).
+  [[nodiscard]] VisibilityCounts in_box(const Box3& world_box, double margin_m) const;
+  /// Like in_box, listing each beam; out is cleared first. Order: by ring, then by azimuth.
+  void cells_in_box(const Box3& world_box, double margin_m, std::vector<BoxBeam>& out) const;
+
+  /// The beam of a cell in the world frame (the geometry SensorModel::point uses).
+  [[nodiscard]] BeamRay cell_ray(int ring, int column) const;
+  /// Column of a firing azimuth (radians, any turn): nearest column azimuth, or nothing inside
+  /// a gap wider than two nominal column steps beyond half a step from its ends.
+  [[nodiscard]] std::optional<int> column_of_azimuth(double azimuth_rad) const;
+  /// Ring of a sensor-frame point: nearest ring elevation seen from each ring's beam origin,
+  /// within half the gap to the neighbouring ring (half a nominal gap at the ends).
+  [[nodiscard]] std::optional<int> ring_of_sensor_point(const Eigen::Vector3d& sensor_point) const;
+  /// Median spacing of the column azimuths (radians), the nominal column step.
+  [[nodiscard]] double nominal_column_step_rad() const { return nominal_step_rad_; }
+
+  /// The scan this query answers from.
+  [[nodiscard]] const OrganizedScan& scan() const { return *scan_; }
+
+ private:
+  struct Located {
+    int ring;
+    int column;
+    double distance_m;
+  };
+  [[nodiscard]] std::optional<Located> locate(const Eigen::Vector3d& world_point) const;
+  template <typename Visit>
+  void visit_box(const Box3& world_box, double margin_m, Visit&& visit) const;
+
+  const OrganizedScan* scan_;
+  int rings_;
+  int columns_;
+  Eigen::Matrix3d world_R_sensor_;
+  Eigen::Vector3d world_t_sensor_;
+  Eigen::Matrix3d sensor_R_world_;
+  Eigen::Vector3d sensor_t_world_;
+  // Per ring.
+  std::vector<double> elevation_rad_, cos_el_, sin_el_, offset_m_, az_offset_rad_, cos_az_off_,
+      sin_az_off_, accept_below_rad_, accept_above_rad_;
+  double offset_min_m_{0.0};
+  double offset_max_m_{0.0};
+  // Per column: cos/sin of its azimuth.
+  std::vector<double> cos_az_, sin_az_;
+  // Column azimuths wrapped to [0, 2 pi), ascending, with their columns; a bucket table into it.
+  std::vector<double> sorted_az_;
+  std::vector<int> sorted_column_;
+  std::vector<int> bucket_;
+  double nominal_step_rad_{0.0};
+};
+
+}  // namespace ringtrack::core
