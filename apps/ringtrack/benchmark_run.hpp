@@ -35,8 +35,9 @@ struct BenchmarkCaseOptions {
 /// Results of one scenario with one sensor motion.
 struct BenchmarkCase {
   int scenario{0};
-  std::string name;    ///< e.g. "empty-field"
-  bool moving{false};  ///< sensor on the figure 8
+  std::string name;        ///< e.g. "empty-field"
+  bool moving{false};      ///< sensor on the figure 8
+  bool validation{false};  ///< a validation scenario (config/validation/), reported apart
   std::int64_t scans{0};
   eval::TrackingEvalResult tracking;
   eval::MapCounts map;

@@ -1,6 +1,7 @@
 // `ringtrack benchmark`: every built-in scenario with a static and a moving sensor, the default
 // configuration, the paper's Table II metrics, map metrics and time per stage, as a Markdown
-// report, a per-scan timing CSV, a plot and optionally JSON.
+// report, a per-scan timing CSV, a plot and optionally JSON. Scenario files (the validation set in
+// config/validation/, never tuned on) run the same way and are reported as their own group.
 
 #include <algorithm>
 #include <chrono>
@@ -26,6 +27,7 @@
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/output_file.hpp"
 #include "ringtrack/sim/scenario.hpp"
+#include "ringtrack/sim/scenario_file.hpp"
 #include "ringtrack/version.hpp"
 
 namespace ringtrack::cli {
@@ -35,6 +37,9 @@ namespace fs = std::filesystem;
 
 struct BenchmarkOptions {
   std::vector<int> scenarios{1, 2, 3, 4, 5, 6, 7};
+  bool scenarios_given{false};              // --scenarios on the command line
+  std::vector<std::string> scenario_files;  // validation scenarios (YAML)
+  bool validation{false};                   // all of config/validation/
   std::optional<double> duration_s;
   std::string out{"benchmark"};
   bool json{false};
@@ -71,7 +76,24 @@ std::string fixed(double v, int decimals) {
 }
 
 std::string case_label(const BenchmarkCase& c) {
-  return std::to_string(c.scenario) + " " + c.name + (c.moving ? " (moving)" : " (static)");
+  return (c.validation ? std::string("V ") : std::to_string(c.scenario) + " ") + c.name +
+         (c.moving ? " (moving)" : " (static)");
+}
+
+// Scenario files of the validation set, sorted by name.
+std::vector<std::string> validation_files() {
+  const fs::path dir = fs::path(RINGTRACK_CONFIG_DIR) / "validation";
+  std::vector<std::string> out;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir, ec)) {
+    if (e.is_regular_file() && e.path().extension() == ".yaml") out.push_back(e.path().string());
+  }
+  if (ec || out.empty()) {
+    throw core::InputError(dir.string() + ": no validation scenarios (*.yaml) found" +
+                           (ec ? ": " + ec.message() : std::string()));
+  }
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 std::string machine_description() {
@@ -224,6 +246,12 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
         "0.5 m; MT/PT/ML as ratios (counts); FN = misses; GT = ground-truth presences. Map: "
         "preservation = static points kept, rejection = dynamic-object points removed "
         "(docs/evaluation.md). Groups are sums over their scenarios, never averages.\n\n";
+  if (std::any_of(cases.begin(), cases.end(),
+                  [](const BenchmarkCase& c) { return c.validation; })) {
+    md << "Rows marked V are validation scenarios (config/validation/, docs/simulator.md): they "
+          "are never used to tune the defaults, so their groups show how the defaults generalise."
+          "\n\n";
+  }
   md << "| scenario | scans | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML | IDSW | "
         "FP | FN | GT | map preservation | map rejection |\n";
   md << "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: "
@@ -361,13 +389,34 @@ void run_benchmark(const BenchmarkOptions& o) {
     throw core::ConfigError("benchmark: --duration must be > 0");
   const bool with_static = o.sensors != "moving";
   const bool with_moving = o.sensors != "static";
-  std::vector<sim::Scenario> scenarios;
-  for (const int number : o.scenarios) {
-    sim::Scenario s = sim::builtin_scenario(std::to_string(number));
-    if (o.duration_s) s.duration_s = *o.duration_s;
-    if (with_static) scenarios.push_back(s);
-    if (with_moving) scenarios.push_back(sim::with_moving_sensor(s));
+  std::vector<std::string> files = o.scenario_files;
+  if (o.validation) {
+    for (const std::string& f : validation_files()) files.push_back(f);
   }
+  // Built-ins run by default, and beside scenario files only when --scenarios names them.
+  const bool with_builtins = files.empty() || o.scenarios_given;
+  struct Run {
+    sim::Scenario scenario;
+    bool validation;
+  };
+  std::vector<Run> scenarios;
+  const auto add = [&](sim::Scenario s, bool validation) {
+    if (o.duration_s) s.duration_s = *o.duration_s;
+    // A file's own sensor motion is replaced exactly as for the built-ins: static, then the
+    // figure 8 about its position (a scripted sensor path is kept as the moving run).
+    const bool scripted = s.sensor.motion == sim::SensorMotion::kScripted;
+    sim::Scenario still = s;
+    still.sensor.motion = sim::SensorMotion::kStatic;
+    if (with_static) scenarios.push_back({still, validation});
+    if (with_moving)
+      scenarios.push_back({scripted ? s : sim::with_moving_sensor(still), validation});
+  };
+  if (with_builtins) {
+    for (const int number : o.scenarios) add(sim::builtin_scenario(std::to_string(number)), false);
+  }
+  for (const std::string& f : files) add(sim::load_scenario_file(f), true);
+  // Every run is checked before the first one starts (a moving variant may hit a solid).
+  for (const Run& r : scenarios) sim::validate(r.scenario, r.scenario.name);
 
   const fs::path out = o.out;
   std::error_code ec;
@@ -385,18 +434,20 @@ void run_benchmark(const BenchmarkOptions& o) {
   io::OutputFile timing(out / "timing.csv");
   timing.write(
       "case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n");
-  for (const sim::Scenario& s : scenarios) {
+  for (const Run& run : scenarios) {
+    const sim::Scenario& s = run.scenario;
     const bool moving = s.sensor.motion != sim::SensorMotion::kStatic;
     if (!o.quiet && !o.json) {
-      std::cerr << "scenario " << s.number << " " << s.name << (moving ? " (moving)" : " (static)")
-                << " ..." << std::flush;
+      std::cerr << "scenario " << (run.validation ? std::string("V") : std::to_string(s.number))
+                << " " << s.name << (moving ? " (moving)" : " (static)") << " ..." << std::flush;
     }
     // --save-tracks: the same files as `simulate` + `run` write, for `ringtrack eval` and plots.
     std::unique_ptr<io::TracksCsvWriter> tracks_csv;
     std::unique_ptr<io::ObjectsCsvWriter> objects_csv;
     case_options.on_scan = {};
     if (o.save_tracks) {
-      const std::string stem = std::to_string(s.number) + (moving ? "-moving" : "-static");
+      const std::string stem = (run.validation ? "V-" + s.name : std::to_string(s.number)) +
+                               (moving ? "-moving" : "-static");
       tracks_csv = std::make_unique<io::TracksCsvWriter>(out / ("tracks-" + stem + ".csv"));
       objects_csv = std::make_unique<io::ObjectsCsvWriter>(out / ("objects-" + stem + ".csv"));
       case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
@@ -410,6 +461,7 @@ void run_benchmark(const BenchmarkOptions& o) {
       };
     }
     BenchmarkCase c = run_benchmark_case(s, config, case_options);
+    c.validation = run.validation;
     if (tracks_csv) {
       tracks_csv->close();
       objects_csv->close();
@@ -436,18 +488,30 @@ void run_benchmark(const BenchmarkOptions& o) {
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+  // Built-ins and validation scenarios are summed apart: "all ..." are the built-ins only.
   std::vector<Aggregate> groups;
-  Aggregate all_static, all_moving, overall;
+  Aggregate all_static, all_moving, overall, val_static, val_moving, val_overall;
   all_static.label = "all static";
   all_moving.label = "all moving";
   overall.label = "overall";
+  val_static.label = "validation static";
+  val_moving.label = "validation moving";
+  val_overall.label = "validation overall";
   for (const BenchmarkCase& c : cases) {
-    (c.moving ? all_moving : all_static).add(c);
-    overall.add(c);
+    if (c.validation) {
+      (c.moving ? val_moving : val_static).add(c);
+      val_overall.add(c);
+    } else {
+      (c.moving ? all_moving : all_static).add(c);
+      overall.add(c);
+    }
   }
   if (all_static.cases > 0) groups.push_back(all_static);
   if (all_moving.cases > 0) groups.push_back(all_moving);
   if (all_static.cases > 0 && all_moving.cases > 0) groups.push_back(overall);
+  if (val_static.cases > 0) groups.push_back(val_static);
+  if (val_moving.cases > 0) groups.push_back(val_moving);
+  if (val_static.cases > 0 && val_moving.cases > 0) groups.push_back(val_overall);
 
   const bool plotted = !o.no_plot && plot_stage_times(out / "timing.csv", out / "stage_times.png");
   io::write_file(out / "report.md",
@@ -467,6 +531,7 @@ void run_benchmark(const BenchmarkOptions& o) {
   for (const BenchmarkCase& c : cases) {
     j["cases"].push_back({{"scenario", c.scenario},
                           {"name", c.name},
+                          {"validation", c.validation},
                           {"sensor", c.moving ? "moving" : "static"},
                           {"scans", c.scans},
                           {"hypotheses_total", c.tracking.hypotheses_total},
@@ -529,12 +594,22 @@ void register_benchmark(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "benchmark",
       "simulate the built-in scenarios (static and moving sensor), run the pipeline with one "
-      "configuration, and report the paper's Table II metrics, map metrics and time per stage");
+      "configuration, and report the paper's Table II metrics, map metrics and time per stage; "
+      "--validation/--scenario-files: the validation scenarios, as their own group");
   auto o = std::make_shared<BenchmarkOptions>();
-  cmd->add_option("--scenarios", o->scenarios, "built-in scenarios to run (1-7)")
-      ->delimiter(',')
-      ->check(CLI::Range(1, 7))
-      ->capture_default_str();
+  auto* scenarios_opt =
+      cmd->add_option("--scenarios", o->scenarios,
+                      "built-in scenarios to run (1-7; with scenario files: only when given)")
+          ->delimiter(',')
+          ->check(CLI::Range(1, 7))
+          ->capture_default_str();
+  cmd->add_option("--scenario-files", o->scenario_files,
+                  "validation scenario files (YAML) to run with a static and a moving sensor, "
+                  "reported as the validation group")
+      ->check(CLI::ExistingFile);
+  cmd->add_flag("--validation", o->validation,
+                "run the validation scenarios of config/validation/ (never tuned on; see "
+                "docs/simulator.md)");
   cmd->add_option("--duration", o->duration_s,
                   "seconds to simulate per scenario (default: each scenario's full length)");
   cmd->add_option("--out", o->out, "output folder (created)")->capture_default_str();
@@ -555,7 +630,10 @@ void register_benchmark(CLI::App& app) {
       ->capture_default_str();
   cmd->add_flag("--quiet", o->quiet, "no progress on stderr");
   o->config.add_to(*cmd);
-  cmd->callback([o] { run_benchmark(*o); });
+  cmd->callback([o, scenarios_opt] {
+    o->scenarios_given = scenarios_opt->count() > 0;
+    run_benchmark(*o);
+  });
 }
 
 }  // namespace ringtrack::cli

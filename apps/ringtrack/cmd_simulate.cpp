@@ -69,9 +69,18 @@ void run_simulate(const SimulateOptions& o) {
   io::SequenceWriter writer(o.out, meta, wo);
   {
     // The effective scenario beside the output, so a run can be repeated from the folder alone.
+    // Scripted actors go beside it as trajectories.csv.
+    sim::Scenario effective = scenario;
+    if (!scenario.scripted.empty()) {
+      effective.trajectories_file = "trajectories.csv";
+      const auto csv = std::filesystem::path(o.out) / effective.trajectories_file;
+      std::ofstream t(csv, std::ios::binary);
+      t << sim::format_trajectories_csv(scenario.scripted);
+      if (!t.good()) throw core::Error(csv.string() + ": cannot write");
+    }
     const auto path = std::filesystem::path(o.out) / "scenario.yaml";
     std::ofstream f(path, std::ios::binary);
-    f << sim::format_scenario_yaml(scenario);
+    f << sim::format_scenario_yaml(effective);
     if (!f.good()) throw core::Error(path.string() + ": cannot write");
   }
   const bool moving = scenario.sensor.motion != sim::SensorMotion::kStatic;

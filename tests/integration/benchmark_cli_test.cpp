@@ -200,5 +200,66 @@ TEST_F(BenchmarkCli, MatchesSimulateRunEval) {
   }
 }
 
+// Validation scenarios (config/validation/): simulated like the built-ins, reported apart.
+TEST(BenchmarkValidationCli, RunsTheValidationSetAsItsOwnGroup) {
+  const fs::path dir = testing::make_temp_dir("ringtrack_benchmark_validation");
+  const auto r = run_command(kCli + " benchmark --validation --duration 2 --seed 3 --no-plot " +
+                             "--json --out " + (dir / "v").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j["cases"].size(), 10u);  // five scenarios x static/moving, no built-ins
+  EXPECT_EQ(j["cases"][0]["name"], "v1-plaza-groups");
+  EXPECT_EQ(j["cases"][0]["sensor"], "static");
+  EXPECT_EQ(j["cases"][1]["sensor"], "moving");
+  EXPECT_EQ(j["cases"][9]["name"], "v5-far-field");
+  long fp = 0;
+  for (const auto& c : j["cases"]) {
+    EXPECT_TRUE(c["validation"].get<bool>());
+    EXPECT_EQ(c["scans"], 20);
+    fp += c["metrics"]["false_positives"].get<long>();
+  }
+  EXPECT_FALSE(j["groups"].contains("all static"));
+  EXPECT_TRUE(j["groups"].contains("validation static"));
+  EXPECT_TRUE(j["groups"].contains("validation moving"));
+  EXPECT_EQ(j["groups"]["validation overall"]["metrics"]["false_positives"].get<long>(), fp);
+  const std::string report = read(dir / "v" / "report.md");
+  for (const char* needle :
+       {"| V v1-plaza-groups (static) | 20 |", "| V v4-parking (moving) | 20 |",
+        "**validation static**", "**validation moving**", "never used to tune the defaults"}) {
+    EXPECT_NE(report.find(needle), std::string::npos) << needle;
+  }
+
+  // Scenario files beside chosen built-ins: both groups, each summing only its own cases.
+  const std::string file = std::string(RINGTRACK_SOURCE_DIR) + "/config/validation/v4-parking.yaml";
+  const auto both =
+      run_command(kCli + " benchmark --scenarios 7 --scenario-files " + file +
+                  " --sensors static --duration 1 --no-plot --json --out " + (dir / "b").string());
+  ASSERT_EQ(both.exit_code, 0) << both.err;
+  const auto k = nlohmann::json::parse(both.out);
+  ASSERT_EQ(k["cases"].size(), 2u);
+  EXPECT_EQ(k["cases"][0]["name"], "hall");
+  EXPECT_FALSE(k["cases"][0]["validation"].get<bool>());
+  EXPECT_EQ(k["cases"][1]["name"], "v4-parking");
+  EXPECT_EQ(k["groups"]["all static"]["metrics"]["gt_presences"],
+            k["cases"][0]["metrics"]["gt_presences"]);
+  EXPECT_EQ(k["groups"]["validation static"]["metrics"]["gt_presences"],
+            k["cases"][1]["metrics"]["gt_presences"]);
+
+  // A scenario file whose path runs through a parked car fails before anything runs.
+  std::ofstream(dir / "bad.yaml") << "duration_s: 5\nactors: {trajectories: bad.csv}\n"
+                                     "boxes: [{center_m: [10, 0], size_m: [4.5, 1.8, 1.5]}]\n";
+  std::ofstream(dir / "bad.csv")
+      << "# a person\nt,id,class,x,y\n0,1,person,10,4\n5,1,person,10,-4\n";
+  const auto bad = run_command(kCli + " benchmark --scenario-files " + (dir / "bad.yaml").string() +
+                               " --duration 1 --no-plot --out " + (dir / "c").string());
+  EXPECT_NE(bad.exit_code, 0);
+  EXPECT_NE(bad.err.find("bad.yaml: trajectory of id 1: segment t=0-5 s"), std::string::npos)
+      << bad.err;
+  EXPECT_NE(bad.err.find("crosses boxes[0]"), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  std::error_code ec;
+  fs::remove_all(dir, ec);
+}
+
 }  // namespace
 }  // namespace ringtrack

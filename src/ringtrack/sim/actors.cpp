@@ -12,7 +12,6 @@ namespace {
 
 constexpr std::int64_t kStepNs = 10'000'000;  // 10 ms
 constexpr double kPi = std::numbers::pi;
-constexpr double kSensorKeepOutM = 0.6;  // the sensor's tripod / mast
 
 double wrap(double a) {
   while (a > kPi) a -= 2 * kPi;
@@ -111,10 +110,12 @@ ActorWorld::ActorWorld(const Scenario& scenario, std::uint64_t seed)
     a.object_class = s.object_class;
     a.script = static_cast<int>(i);
     a.rng = Rng(rng.next());
-    a.height_m = s.object_class == ObjectClass::kPerson
-                     ? 1.75
-                     : (s.object_class == ObjectClass::kRobot ? 0.42 : 0.2);
-    a.reflectivity = 0.4f;
+    const bool has_body =
+        s.object_class == ObjectClass::kPerson || s.object_class == ObjectClass::kDistractor;
+    a.height_m =
+        has_body ? s.height_m.value_or(1.75) : (s.object_class == ObjectClass::kRobot ? 0.42 : 0.2);
+    a.width_scale = has_body && s.width_m ? *s.width_m / kPersonWidthM : 1.0;
+    a.reflectivity = static_cast<float>(s.reflectivity.value_or(0.4));
     actors_.push_back(std::move(a));
   }
 }
@@ -236,6 +237,13 @@ void ActorWorld::step(Actor& a, double dt) {
         a.gait_phase_rad + 2 * kPi * a.speed_mps * dt / stride_of(a.height_m, a.speed_mps),
         2 * kPi);
   }
+}
+
+bool ActorWorld::present(std::size_t i, std::int64_t t_ns) const {
+  const Actor& a = actors_[i];
+  if (a.script < 0) return true;
+  return scenario_->scripted[static_cast<std::size_t>(a.script)].present_at(
+      static_cast<double>(t_ns) * 1e-9);
 }
 
 ActorState ActorWorld::state_at(std::size_t i, std::int64_t t_ns) const {

@@ -49,6 +49,8 @@ class ActorWorld {
   ActorWorld(const Scenario& scenario, std::uint64_t seed);
   /// Steps the simulation up to time t_ns (never backwards).
   void advance_to(std::int64_t t_ns);
+  /// True when actor i exists at t_ns (scripted actors: between their first and last waypoint).
+  [[nodiscard]] bool present(std::size_t i, std::int64_t t_ns) const;
   /// States at t_ns >= the current time (extrapolated from the last step).
   [[nodiscard]] ActorState state_at(std::size_t i, std::int64_t t_ns) const;
   /// The actors.
@@ -73,7 +75,8 @@ void append_body(const Actor& a, const ActorState& st, std::int32_t slot,
                  std::vector<Primitive>& out);
 /// True centre of the actor's body (middle of its height above the base).
 Eigen::Vector3d body_center(const Actor& a, const ActorState& st);
-/// State of a scripted trajectory at time t_s (standing before the first and after the last row).
+/// State of a scripted trajectory at time t_s (clamped to the first and last row; whether the
+/// actor exists then is ScriptedActor::present_at).
 ActorState scripted_state(const ScriptedActor& s, double t_s, const Ground& ground,
                           double stride_m);
 

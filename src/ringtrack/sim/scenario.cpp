@@ -16,6 +16,7 @@ namespace ringtrack::sim {
 namespace {
 
 constexpr double kDeg = std::numbers::pi / 180.0;
+constexpr double kGravity = 9.81;
 
 std::string fmt_xy(const Eigen::Vector2d& p) {
   std::ostringstream s;
@@ -37,6 +38,101 @@ void require_positive(const std::string& src, const std::string& entry, const ch
 void require_unit(const std::string& src, const std::string& entry, const char* key, double v) {
   if (!(v >= 0.0 && v <= 1.0)) {
     fail(src, entry, std::string(key) + " must be in [0, 1] (got " + std::to_string(v) + ")");
+  }
+}
+
+std::string fmt_xyz(const Eigen::Vector3d& p) {
+  std::ostringstream s;
+  s.precision(3);
+  s << "(" << p.x() << ", " << p.y() << ", " << p.z() << ")";
+  return s.str();
+}
+
+std::string fmt_t(double t_s) {
+  std::ostringstream s;
+  s.precision(6);
+  s << t_s;
+  return s.str();
+}
+
+Eigen::Quaterniond rpy(const Eigen::Vector3d& rpy_rad) {
+  return Eigen::AngleAxisd(rpy_rad.z(), Eigen::Vector3d::UnitZ()) *
+         Eigen::AngleAxisd(rpy_rad.y(), Eigen::Vector3d::UnitY()) *
+         Eigen::AngleAxisd(rpy_rad.x(), Eigen::Vector3d::UnitX());
+}
+
+// Entry ("boxes[2]", ...) of the first static solid within margin of the world point p, or "".
+std::string solid_containing(const Scenario& s, const Eigen::Vector3d& p, double margin) {
+  const Ground& g = s.ground;
+  const auto ground_at = [&](const Eigen::Vector2d& c) {
+    return g.enabled ? g.height_at(c.x(), c.y()) : 0.0;
+  };
+  // Upright yawed box: centre, half sizes, yaw, bottom z.
+  const auto in_box = [&](const Eigen::Vector2d& c, const Eigen::Vector3d& half, double yaw,
+                          double z0) {
+    const Eigen::Vector2d r = p.head<2>() - c;
+    const double cs = std::cos(yaw), sn = std::sin(yaw);
+    return std::abs(cs * r.x() + sn * r.y()) <= half.x() + margin &&
+           std::abs(-sn * r.x() + cs * r.y()) <= half.y() + margin && p.z() >= z0 - margin &&
+           p.z() <= z0 + 2.0 * half.z() + margin;
+  };
+  for (std::size_t i = 0; i < s.boxes.size(); ++i) {
+    const auto& b = s.boxes[i];
+    if (in_box(b.center_m, 0.5 * b.size_m, b.yaw_deg * kDeg, ground_at(b.center_m) + b.base_z_m))
+      return "boxes[" + std::to_string(i) + "]";
+  }
+  for (std::size_t i = 0; i < s.walls.size(); ++i) {
+    const auto& w = s.walls[i];
+    const Eigen::Vector2d d = w.to_m - w.from_m;
+    const Eigen::Vector2d c = 0.5 * (w.from_m + w.to_m);
+    if (in_box(c, {0.5 * d.norm(), 0.5 * w.thickness_m, 0.5 * w.height_m}, std::atan2(d.y(), d.x()),
+               ground_at(c) + w.base_z_m))
+      return "walls[" + std::to_string(i) + "]";
+  }
+  for (std::size_t i = 0; i < s.cylinders.size(); ++i) {
+    const auto& c = s.cylinders[i];
+    const double z0 = ground_at(c.center_m) + c.base_z_m;
+    if ((p.head<2>() - c.center_m).norm() <= c.radius_m + margin && p.z() >= z0 - margin &&
+        p.z() <= z0 + c.height_m + margin)
+      return "cylinders[" + std::to_string(i) + "]";
+  }
+  for (std::size_t i = 0; i < s.ellipsoids.size(); ++i) {
+    const auto& e = s.ellipsoids[i];
+    Eigen::Vector3d c = e.center_m;
+    c.z() += ground_at(e.center_m.head<2>());
+    const Eigen::Vector3d local =
+        Eigen::AngleAxisd(-e.yaw_deg * kDeg, Eigen::Vector3d::UnitZ()) * (p - c);
+    const Eigen::Vector3d grown = e.radii_m + Eigen::Vector3d::Constant(margin);
+    if (local.cwiseQuotient(grown).norm() <= 1.0) return "ellipsoids[" + std::to_string(i) + "]";
+  }
+  return {};
+}
+
+// A moving sensor must not fly through solids: its path is sampled every <= 5 cm.
+void validate_sensor_path(const Scenario& s, const std::string& src) {
+  const SensorSpec& z = s.sensor;
+  if (z.motion == SensorMotion::kStatic) return;
+  constexpr double kSensorRadiusM = 0.1;  // a VLP-16 is 10 cm wide; keep a little air around it
+  const double speed = z.motion == SensorMotion::kFigure8 ? z.max_speed_mps * 1.1 : [&] {
+    double v = 0.1;
+    for (std::size_t i = 1; i < z.keyframes.size(); ++i) {
+      v = std::max(v, (z.keyframes[i].xyz_m - z.keyframes[i - 1].xyz_m).norm() /
+                          (z.keyframes[i].t_s - z.keyframes[i - 1].t_s));
+    }
+    return v;
+  }();
+  const double step_s = std::clamp(0.05 / speed, 1e-3, 0.05);
+  const auto n = static_cast<std::int64_t>(std::ceil(s.duration_s / step_s));
+  for (std::int64_t k = 0; k <= n; ++k) {
+    const double t = std::min(static_cast<double>(k) * step_s, s.duration_s);
+    const Eigen::Vector3d p =
+        sensor_pose(z, static_cast<std::int64_t>(std::llround(t * 1e9))).translation;
+    const std::string hit = solid_containing(s, p, kSensorRadiusM);
+    if (!hit.empty()) {
+      fail(src, "sensor",
+           (z.motion == SensorMotion::kFigure8 ? std::string("figure8") : std::string("scripted")) +
+               " path at t=" + fmt_t(t) + " s " + fmt_xyz(p) + " passes through " + hit);
+    }
   }
 }
 
@@ -437,19 +533,55 @@ void validate(const Scenario& s, const std::string& src) {
       }
     }
   }
+  // Scripted actors: ids, times, bodies, and paths clear of obstacles and of the sensor's mast.
+  std::vector<Footprint> blocking = footprints;
+  if (s.sensor.motion != SensorMotion::kScripted) {
+    // The mast stands at position_m (the figure 8 flies about it); a scripted sensor has none.
+    blocking.push_back({s.sensor.position_m.head<2>(),
+                        {kSensorKeepOutM, 0.0},
+                        0.0,
+                        true,
+                        "the sensor's keep-out zone (" + fmt_t(kSensorKeepOutM) + " m around " +
+                            fmt_xy(s.sensor.position_m.head<2>()) + ")"});
+  }
+  constexpr double kPathMarginM = 0.2;  // half a body
   std::set<std::uint32_t> ids;
   for (const auto& a : s.scripted) {
     const std::string e = "trajectory of id " + std::to_string(a.id);
     if (a.id == 0) fail(src, e, "ids must be >= 1 (0 is the background label)");
     if (!ids.insert(a.id).second) fail(src, e, "duplicate id");
     if (a.waypoints.empty()) fail(src, e, "no waypoints");
+    if (a.waypoints.size() < 2) {
+      fail(src, e,
+           "a single waypoint (t=" + fmt_t(a.waypoints[0].t_s) +
+               " s): an actor exists from its first to its last waypoint, give at least two "
+               "(e.g. the same place at t=0 and at the end to stand all the time)");
+    }
     for (std::size_t i = 1; i < a.waypoints.size(); ++i) {
       if (!(a.waypoints[i].t_s > a.waypoints[i - 1].t_s)) fail(src, e, "times must increase");
     }
+    const bool has_body =
+        a.object_class == ObjectClass::kPerson || a.object_class == ObjectClass::kDistractor;
+    if ((a.height_m || a.width_m) && !has_body) {
+      fail(src, e,
+           "height_m/width_m apply to people and distractors only, not to a " +
+               std::string(class_name(a.object_class)));
+    }
+    if (a.height_m && !(*a.height_m >= kMinBodyHeightM && *a.height_m <= kMaxBodyHeightM)) {
+      fail(src, e,
+           "height_m must be in [" + fmt_t(kMinBodyHeightM) + ", " + fmt_t(kMaxBodyHeightM) +
+               "] (got " + fmt_t(*a.height_m) + ")");
+    }
+    if (a.width_m && !(*a.width_m >= kMinBodyWidthM && *a.width_m <= kMaxBodyWidthM)) {
+      fail(src, e,
+           "width_m must be in [" + fmt_t(kMinBodyWidthM) + ", " + fmt_t(kMaxBodyWidthM) +
+               "] (got " + fmt_t(*a.width_m) + ")");
+    }
+    if (a.reflectivity) require_unit(src, e, "reflectivity", *a.reflectivity);
     if (a.object_class == ObjectClass::kDrone) continue;
     for (const auto& w : a.waypoints) {
-      for (const auto& f : footprints) {
-        if (f.contains(w.xyz_m.head<2>(), 0.2)) {
+      for (const auto& f : blocking) {
+        if (f.contains(w.xyz_m.head<2>(), kPathMarginM)) {
           std::ostringstream t;
           t << "waypoint at t=" << w.t_s << " s " << fmt_xy(w.xyz_m.head<2>()) << " is inside "
             << f.entry;
@@ -457,7 +589,69 @@ void validate(const Scenario& s, const std::string& src) {
         }
       }
     }
+    for (std::size_t i = 1; i < a.waypoints.size(); ++i) {
+      const Waypoint& p = a.waypoints[i - 1];
+      const Waypoint& q = a.waypoints[i];
+      for (const auto& f : blocking) {
+        if (f.crosses(p.xyz_m.head<2>(), q.xyz_m.head<2>(), kPathMarginM)) {
+          fail(src, e,
+               "segment t=" + fmt_t(p.t_s) + "-" + fmt_t(q.t_s) + " s from " +
+                   fmt_xy(p.xyz_m.head<2>()) + " to " + fmt_xy(q.xyz_m.head<2>()) + " crosses " +
+                   f.entry);
+        }
+      }
+    }
   }
+  validate_sensor_path(s, src);
+}
+
+core::Pose sensor_pose(const SensorSpec& s, std::int64_t t_ns) {
+  core::Pose p;
+  p.stamp_ns = t_ns;
+  const double t = static_cast<double>(t_ns) * 1e-9;
+  switch (s.motion) {
+    case SensorMotion::kStatic:
+      p.translation = s.position_m;
+      break;
+    case SensorMotion::kFigure8: {
+      // Lemniscate of Gerono: x = R sin(wt), y = R sin(wt) cos(wt); peak speed R w sqrt(2).
+      const double r = s.figure8_radius_m;
+      const double w = s.max_speed_mps / (r * std::sqrt(2.0));
+      const double sw = std::sin(w * t);
+      const double s2 = std::sin(2 * w * t);
+      p.translation =
+          s.position_m + Eigen::Vector3d(r * sw, 0.5 * r * s2, 0.15 * r * std::sin(0.5 * w * t));
+      // A multirotor tilts its thrust towards its acceleration; tilt_gain scales that tilt.
+      const Eigen::Vector3d acc{-r * w * w * sw, -2.0 * r * w * w * s2, 0.0};
+      const Eigen::Vector3d up = (s.tilt_gain * acc + Eigen::Vector3d(0, 0, kGravity)).normalized();
+      const double yaw = 0.35 * std::sin(0.5 * w * t);
+      p.rotation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), up) *
+                   Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ());
+      break;
+    }
+    case SensorMotion::kScripted: {
+      const auto& k = s.keyframes;
+      const auto pose_of = [&](const SensorKeyframe& f) {
+        core::Pose q;
+        q.translation = f.xyz_m;
+        q.rotation = rpy(f.rpy_deg * kDeg);
+        return q;
+      };
+      if (t <= k.front().t_s) {
+        p = pose_of(k.front());
+      } else if (t >= k.back().t_s) {
+        p = pose_of(k.back());
+      } else {
+        std::size_t i = 0;
+        while (k[i + 1].t_s < t) ++i;
+        const double u = (t - k[i].t_s) / (k[i + 1].t_s - k[i].t_s);
+        p = core::Pose::interpolate(pose_of(k[i]), pose_of(k[i + 1]), u);
+      }
+      p.stamp_ns = t_ns;
+      break;
+    }
+  }
+  return p;
 }
 
 std::vector<ScenarioInfo> builtin_scenarios() {

@@ -5,10 +5,12 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "ringtrack/core/pose.hpp"
 #include "ringtrack/sim/geometry.hpp"
 
 namespace ringtrack::sim {
@@ -59,12 +61,29 @@ struct Waypoint {
   double t_s{0.0};
   Eigen::Vector3d xyz_m{Eigen::Vector3d::Zero()};
 };
-/// An actor that follows waypoints (linear between them, standing before the first/after the last).
+/// An actor that follows waypoints, linear between them. It exists only from its first to its
+/// last waypoint time (enters and leaves the scene); before and after it is absent: not rendered,
+/// no ground truth.
 struct ScriptedActor {
   std::uint32_t id{0};
   ObjectClass object_class{ObjectClass::kPerson};
-  std::vector<Waypoint> waypoints;  ///< sorted by time
+  std::vector<Waypoint> waypoints;       ///< sorted by time, at least two
+  std::optional<double> height_m{};      ///< people, distractors: body height (default 1.75 m)
+  std::optional<double> width_m{};       ///< people, distractors: shoulder width (default 0.6 m)
+  std::optional<double> reflectivity{};  ///< 0..1 (default 0.4)
+  /// True while the actor exists: first waypoint time <= t_s <= last waypoint time.
+  [[nodiscard]] bool present_at(double t_s) const {
+    return !waypoints.empty() && t_s >= waypoints.front().t_s && t_s <= waypoints.back().t_s;
+  }
 };
+
+/// Body size limits of scripted people and distractors (checked by the CSV reader and validate).
+inline constexpr double kMinBodyHeightM = 0.5, kMaxBodyHeightM = 2.5;
+inline constexpr double kMinBodyWidthM = 0.2, kMaxBodyWidthM = 1.2;
+/// Shoulder width (outer arm to outer arm) of a person body at width scale 1.
+inline constexpr double kPersonWidthM = 0.6;
+/// Radius about the sensor's position_m (its mast; the figure-8 centre) that walkers keep out of.
+inline constexpr double kSensorKeepOutM = 0.6;
 
 /// How the sensor moves.
 enum class SensorMotion : std::uint8_t { kStatic, kFigure8, kScripted };
@@ -113,8 +132,13 @@ struct Scenario {
 };
 
 /// Throws core::ConfigError naming the entry (e.g. "cylinders[3]: radius_m must be > 0") when
-/// sizes are not positive, probabilities are out of range, or actors start inside obstacles.
+/// sizes are not positive, probabilities are out of range, a scripted actor's waypoints or the
+/// path segments between them touch an obstacle or the sensor's keep-out zone, or a moving
+/// sensor's path passes through a solid.
 void validate(const Scenario& s, const std::string& source = "scenario");
+
+/// Sensor-to-world pose of the sensor spec at time t_ns (static, figure 8 or keyframes).
+core::Pose sensor_pose(const SensorSpec& sensor, std::int64_t t_ns);
 
 /// Number and name of each built-in scenario.
 struct ScenarioInfo {

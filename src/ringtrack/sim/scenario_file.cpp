@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -269,9 +270,65 @@ Scenario parse_scenario_yaml(const std::string& text, const std::string& source)
   return s;
 }
 
+namespace {
+
+// Columns of a trajectory CSV, in their positional order (files without a header).
+enum Column : std::uint8_t {
+  kT,
+  kId,
+  kClass,
+  kX,
+  kY,
+  kZ,
+  kHeight,
+  kWidth,
+  kReflectivity,
+  kColumns
+};
+constexpr const char* kColumnNames[kColumns] = {"t", "id",       "class",   "x",           "y",
+                                                "z", "height_m", "width_m", "reflectivity"};
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> f;
+  std::stringstream ss(line);
+  for (std::string cell; std::getline(ss, cell, ',');) {
+    const auto a = cell.find_first_not_of(" \t"), b = cell.find_last_not_of(" \t");
+    f.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
+  }
+  if (!line.empty() && line.back() == ',') f.emplace_back();  // a trailing empty cell
+  return f;
+}
+
+bool parses_as_number(const std::string& text) {
+  try {
+    std::size_t used = 0;
+    (void)std::stod(text, &used);
+    return used == text.size();
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
+std::string all_column_names() {
+  std::string out;
+  for (const char* n : kColumnNames) out += (out.empty() ? "" : ", ") + std::string(n);
+  return out;
+}
+
+}  // namespace
+
 std::vector<ScriptedActor> parse_trajectories_csv(std::string_view text,
                                                   const std::string& source) {
   std::map<std::uint32_t, ScriptedActor> by_id;
+  // Line where each actor's body values were first given (they must agree on every row).
+  std::map<std::pair<std::uint32_t, int>, std::size_t> body_line;
+  // Field index of each column, -1 = absent; positional until a header says otherwise.
+  int column_at[kColumns];
+  for (int c = 0; c < kColumns; ++c) column_at[c] = c;
+  bool header_seen = false;
+  std::size_t expected_fields = 0;  // with a header: at most its size ...
+  std::size_t required_fields = 0;  // ... and at least up to its last required column
+  bool first_row = true;
   std::size_t line_no = 0;
   std::size_t pos = 0;
   while (pos <= text.size()) {
@@ -282,61 +339,163 @@ std::vector<ScriptedActor> parse_trajectories_csv(std::string_view text,
     if (!line.empty() && line.back() == '\r') line.pop_back();
     const auto first = line.find_first_not_of(" \t");
     if (first == std::string::npos || line[first] == '#') continue;
-    std::vector<std::string> f;
-    std::stringstream ss(line);
-    for (std::string cell; std::getline(ss, cell, ',');) {
-      const auto a = cell.find_first_not_of(" \t"), b = cell.find_last_not_of(" \t");
-      f.push_back(a == std::string::npos ? "" : cell.substr(a, b - a + 1));
-    }
+    const std::vector<std::string> f = split_csv_line(line);
     const std::string where = source + ":" + std::to_string(line_no) + ": ";
-    if (line_no == 1 && !f.empty() && f[0] == "t") continue;  // header
-    if (f.size() != 5 && f.size() != 6) {
-      throw core::InputError(where + "expected t, id, class, x, y[, z] (" +
-                             std::to_string(f.size()) + " fields)");
-    }
-    double v[4] = {0, 0, 0, std::nan("")};
-    const int idx[4] = {0, 3, 4, 5};
-    for (int k = 0; k < 4; ++k) {
-      if (idx[k] >= static_cast<int>(f.size())) continue;
-      try {
-        std::size_t used = 0;
-        v[k] = std::stod(f[static_cast<std::size_t>(idx[k])], &used);
-        if (used != f[static_cast<std::size_t>(idx[k])].size() || !std::isfinite(v[k]))
-          throw std::invalid_argument("x");
-      } catch (const std::exception&) {
-        throw core::InputError(where + "field " + std::to_string(idx[k] + 1) +
-                               ": expected a number, got '" + f[static_cast<std::size_t>(idx[k])] +
-                               "'");
+    if (first_row) {
+      first_row = false;
+      // The header is the first line that is neither blank nor a comment, when its first cell is
+      // not a number.
+      if (!f.empty() && !parses_as_number(f[0])) {
+        header_seen = true;
+        expected_fields = f.size();
+        for (int c = 0; c < kColumns; ++c) column_at[c] = -1;
+        for (std::size_t i = 0; i < f.size(); ++i) {
+          const std::string& name = f[i];
+          int c = 0;
+          while (c < kColumns && name != kColumnNames[c]) ++c;
+          if (c == kColumns) {
+            throw core::InputError(where + "header: unknown column '" + name + "' (expected " +
+                                   all_column_names() + ")");
+          }
+          if (column_at[c] >= 0)
+            throw core::InputError(where + "header: column '" + name + "' given twice");
+          column_at[c] = static_cast<int>(i);
+        }
+        for (const int c : {kT, kId, kClass, kX, kY}) {
+          required_fields = std::max(required_fields, static_cast<std::size_t>(column_at[c] + 1));
+          if (column_at[c] < 0) {
+            throw core::InputError(where + "header: column '" + kColumnNames[c] +
+                                   "' is missing (t, id, class, x, y are required)");
+          }
+        }
+        continue;
       }
     }
+    // Trailing optional cells may be left out (as "t,id,class,x,y" rows under a header with z).
+    if (header_seen ? (f.size() < required_fields || f.size() > expected_fields)
+                    : (f.size() < 5 || f.size() > kColumns)) {
+      throw core::InputError(
+          where +
+          (header_seen ? "expected " + std::to_string(required_fields) + "-" +
+                             std::to_string(expected_fields) + " fields as the header says"
+                       : std::string("expected t, id, class, x, y[, z[, height_m[, width_m[, "
+                                     "reflectivity]]]]")) +
+          " (" + std::to_string(f.size()) + " fields)");
+    }
+    // Cell of column c, or nullptr when the column is absent or the cell empty (optional ones).
+    const auto cell = [&](int c) -> const std::string* {
+      const int i = column_at[c];
+      if (i < 0 || static_cast<std::size_t>(i) >= f.size()) return nullptr;
+      return &f[static_cast<std::size_t>(i)];
+    };
+    // Text of a column known to be present (required columns; the field count was checked).
+    const auto text_of = [&](int c) -> const std::string& {
+      return f[static_cast<std::size_t>(column_at[c])];
+    };
+    const auto number = [&](int c, bool required) -> std::optional<double> {
+      const std::string* text_cell = cell(c);
+      if (!text_cell || (!required && text_cell->empty())) return std::nullopt;
+      double v = 0.0;
+      try {
+        std::size_t used = 0;
+        v = std::stod(*text_cell, &used);
+        if (used != text_cell->size() || !std::isfinite(v)) throw std::invalid_argument("x");
+      } catch (const std::exception&) {
+        throw core::InputError(where + "field " + std::to_string(column_at[c] + 1) + " (" +
+                               kColumnNames[c] + "): expected a number, got '" + *text_cell + "'");
+      }
+      return v;
+    };
+    const double t = *number(kT, true);
+    const double x = *number(kX, true);
+    const double y = *number(kY, true);
+    const double z = number(kZ, false).value_or(std::nan(""));
+    const std::string& id_text = text_of(kId);
     unsigned long id = 0;
     try {
       std::size_t used = 0;
-      id = std::stoul(f[1], &used);
-      if (used != f[1].size() || id == 0 || id > 0xffffffffUL) throw std::invalid_argument("x");
+      id = std::stoul(id_text, &used);
+      if (used != id_text.size() || id == 0 || id > 0xffffffffUL) throw std::invalid_argument("x");
     } catch (const std::exception&) {
-      throw core::InputError(where + "id: expected an integer >= 1, got '" + f[1] + "'");
+      throw core::InputError(where + "id: expected an integer >= 1, got '" + id_text + "'");
     }
     ObjectClass c;
     try {
-      c = class_from_name(f[2]);
+      c = class_from_name(text_of(kClass));
     } catch (const core::Error& e) {
       throw core::InputError(where + e.what());
     }
     auto& a = by_id[static_cast<std::uint32_t>(id)];
     if (!a.waypoints.empty() && a.object_class != c) {
-      throw core::InputError(where + "id " + f[1] + " changes class");
+      throw core::InputError(where + "id " + id_text + " changes class");
     }
     a.id = static_cast<std::uint32_t>(id);
     a.object_class = c;
-    if (!a.waypoints.empty() && !(v[0] > a.waypoints.back().t_s)) {
-      throw core::InputError(where + "id " + f[1] + ": times must increase");
+    if (!a.waypoints.empty() && !(t > a.waypoints.back().t_s)) {
+      throw core::InputError(where + "id " + id_text + ": times must increase");
     }
-    a.waypoints.push_back({v[0], {v[1], v[2], v[3]}});
+    // Body values: per actor, within their range, the same on every row that gives them.
+    const bool has_body = c == ObjectClass::kPerson || c == ObjectClass::kDistractor;
+    const auto body = [&](int col, std::optional<double>& slot, double lo, double hi,
+                          const char* what) {
+      const std::optional<double> v = number(col, false);
+      if (!v) return;
+      const std::string column =
+          "field " + std::to_string(column_at[col] + 1) + " (" + kColumnNames[col] + "): ";
+      if (col != kReflectivity && !has_body) {
+        throw core::InputError(where + column + "a body " + what +
+                               " applies to people and distractors only, not to a " +
+                               std::string(class_name(c)));
+      }
+      if (!(*v >= lo && *v <= hi)) {
+        std::ostringstream m;
+        m << where << column << "expected a " << what << " in [" << lo << ", " << hi << "], got '"
+          << text_of(col) << "'";
+        throw core::InputError(m.str());
+      }
+      const auto key = std::make_pair(a.id, col);
+      if (slot && *slot != *v) {
+        std::ostringstream m;
+        m << where << column << "id " << a.id << " already has " << *slot << " (line "
+          << body_line[key] << "); body values are per actor";
+        throw core::InputError(m.str());
+      }
+      if (!slot) body_line[key] = line_no;
+      slot = v;
+    };
+    body(kHeight, a.height_m, kMinBodyHeightM, kMaxBodyHeightM, "height (m)");
+    body(kWidth, a.width_m, kMinBodyWidthM, kMaxBodyWidthM, "width (m)");
+    body(kReflectivity, a.reflectivity, 0.0, 1.0, "reflectivity");
+    a.waypoints.push_back({t, {x, y, z}});
   }
   std::vector<ScriptedActor> out;
   for (auto& [id, a] : by_id) out.push_back(std::move(a));
   return out;
+}
+
+std::string format_trajectories_csv(const std::vector<ScriptedActor>& actors) {
+  std::ostringstream out;
+  out.precision(17);  // exact round trip
+  out << "t,id,class,x,y,z,height_m,width_m,reflectivity\n";
+  const auto optional = [&](const std::optional<double>& v) {
+    if (v) out << *v;
+  };
+  for (const ScriptedActor& a : actors) {
+    for (std::size_t i = 0; i < a.waypoints.size(); ++i) {
+      const Waypoint& w = a.waypoints[i];
+      out << w.t_s << "," << a.id << "," << class_name(a.object_class) << "," << w.xyz_m.x() << ","
+          << w.xyz_m.y() << ",";
+      if (std::isfinite(w.xyz_m.z())) out << w.xyz_m.z();
+      out << ",";
+      if (i == 0) optional(a.height_m);
+      out << ",";
+      if (i == 0) optional(a.width_m);
+      out << ",";
+      if (i == 0) optional(a.reflectivity);
+      out << "\n";
+    }
+  }
+  return out.str();
 }
 
 Scenario load_scenario_file(const std::filesystem::path& path) {

@@ -1,6 +1,7 @@
 #pragma once
-/// Scenario files (YAML, docs/formats.md) and scripted-trajectory CSV files (t, id, class, x, y[,
-/// z]). The only file access of the sim module: reading these two kinds of file.
+/// Scenario files (YAML, docs/formats.md) and scripted-trajectory CSV files (t, id, class, x, y
+/// and optional z, height_m, width_m, reflectivity). The only file access of the sim module:
+/// reading these two kinds of file.
 
 #include <filesystem>
 #include <string>
@@ -20,9 +21,13 @@ Scenario parse_scenario_yaml(const std::string& text, const std::string& source)
 Scenario load_scenario_file(const std::filesystem::path& path);
 /// The YAML text of a scenario (parse_scenario_yaml reads it back to the same scenario).
 std::string format_scenario_yaml(const Scenario& s);
-/// Parses trajectory CSV rows `t, id, class, x, y[, z]` (header line optional, # comments),
-/// grouped by id and sorted by time; throws core::InputError naming source and line.
+/// Parses trajectory CSV rows `t, id, class, x, y[, z[, height_m[, width_m[, reflectivity]]]]`
+/// (# comments; an optional header naming the columns in any order, also after comments),
+/// grouped by id and sorted by time; throws core::InputError naming source, line and column.
 std::vector<ScriptedActor> parse_trajectories_csv(std::string_view text, const std::string& source);
+/// The trajectory CSV text of scripted actors (header with every column, body values on each
+/// actor's first row); parse_trajectories_csv reads it back to the same actors.
+std::string format_trajectories_csv(const std::vector<ScriptedActor>& actors);
 /// A built-in scenario (number or name, optionally "-moving") or, when the argument names an
 /// existing file or ends in .yaml/.yml, that file.
 Scenario resolve_scenario(const std::string& number_name_or_file);

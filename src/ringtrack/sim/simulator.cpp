@@ -13,18 +13,10 @@ namespace {
 constexpr int kBins = 1024;
 constexpr double kPi = std::numbers::pi;
 constexpr double kBinWidth = 2.0 * kPi / kBins;
-constexpr double kGravity = 9.81;
-constexpr double kDeg = kPi / 180.0;
 
 int bin_of(double azimuth_rad) {
   const int b = static_cast<int>((azimuth_rad + kPi) / kBinWidth);
   return std::clamp(b, 0, kBins - 1);
-}
-
-Eigen::Quaterniond rpy(const Eigen::Vector3d& rpy_rad) {
-  return Eigen::AngleAxisd(rpy_rad.z(), Eigen::Vector3d::UnitZ()) *
-         Eigen::AngleAxisd(rpy_rad.y(), Eigen::Vector3d::UnitY()) *
-         Eigen::AngleAxisd(rpy_rad.x(), Eigen::Vector3d::UnitX());
 }
 
 }  // namespace
@@ -64,53 +56,7 @@ std::int64_t Simulator::scan_stamp_ns(std::int64_t k) const {
 }
 
 core::Pose Simulator::sensor_pose_at(std::int64_t t_ns) const {
-  const SensorSpec& s = scenario_.sensor;
-  core::Pose p;
-  p.stamp_ns = t_ns;
-  const double t = static_cast<double>(t_ns) * 1e-9;
-  switch (s.motion) {
-    case SensorMotion::kStatic:
-      p.translation = s.position_m;
-      break;
-    case SensorMotion::kFigure8: {
-      // Lemniscate of Gerono: x = R sin(wt), y = R sin(wt) cos(wt); peak speed R w sqrt(2).
-      const double r = s.figure8_radius_m;
-      const double w = s.max_speed_mps / (r * std::sqrt(2.0));
-      const double sw = std::sin(w * t);
-      const double s2 = std::sin(2 * w * t);
-      p.translation =
-          s.position_m + Eigen::Vector3d(r * sw, 0.5 * r * s2, 0.15 * r * std::sin(0.5 * w * t));
-      // A multirotor tilts its thrust towards its acceleration; tilt_gain scales that tilt.
-      const Eigen::Vector3d acc{-r * w * w * sw, -2.0 * r * w * w * s2, 0.0};
-      const Eigen::Vector3d up = (s.tilt_gain * acc + Eigen::Vector3d(0, 0, kGravity)).normalized();
-      const double yaw = 0.35 * std::sin(0.5 * w * t);
-      p.rotation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), up) *
-                   Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ());
-      break;
-    }
-    case SensorMotion::kScripted: {
-      const auto& k = s.keyframes;
-      const auto pose_of = [&](const SensorKeyframe& f) {
-        core::Pose q;
-        q.translation = f.xyz_m;
-        q.rotation = rpy(f.rpy_deg * kDeg);
-        return q;
-      };
-      if (t <= k.front().t_s) {
-        p = pose_of(k.front());
-      } else if (t >= k.back().t_s) {
-        p = pose_of(k.back());
-      } else {
-        std::size_t i = 0;
-        while (k[i + 1].t_s < t) ++i;
-        const double u = (t - k[i].t_s) / (k[i + 1].t_s - k[i].t_s);
-        p = core::Pose::interpolate(pose_of(k[i]), pose_of(k[i + 1]), u);
-      }
-      p.stamp_ns = t_ns;
-      break;
-    }
-  }
-  return p;
+  return sensor_pose(scenario_.sensor, t_ns);
 }
 
 void Simulator::build_bins(const Eigen::Vector3d& ref, double sensor_sweep_m, double scan_s) {
@@ -185,10 +131,13 @@ void Simulator::next(SimulatedScan& out) {
   prims_.resize(static_count_);
   std::vector<ActorState>& mid = mid_states_;
   mid.resize(actors.size());
+  present_.resize(actors.size());
   for (std::size_t i = 0; i < actors.size(); ++i) {
+    // Scripted actors exist only between their first and last waypoint (decided at mid-scan).
+    present_[i] = static_cast<std::uint8_t>(world_.present(i, t_mid) ? 1 : 0);
     mid[i] = world_.state_at(i, t_mid);
-    velocity_[i] = mid[i].velocity_mps;
-    append_body(actors[i], mid[i], static_cast<std::int32_t>(i), prims_);
+    velocity_[i] = present_[i] ? mid[i].velocity_mps : Eigen::Vector3d::Zero();
+    if (present_[i]) append_body(actors[i], mid[i], static_cast<std::int32_t>(i), prims_);
   }
 
   // Sensor pose at every column's firing time: a moving sensor's scan is skewed like a real one.
@@ -298,6 +247,7 @@ void Simulator::next(SimulatedScan& out) {
 
   out.objects.clear();
   for (std::size_t i = 0; i < actors.size(); ++i) {
+    if (!present_[i]) continue;  // absent actors have no ground truth
     ObjectTruth t;
     t.id = actors[i].id;
     t.object_class = actors[i].object_class;

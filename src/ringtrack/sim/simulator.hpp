@@ -40,7 +40,7 @@ struct SimulatedScan {
   core::OrganizedScan scan;           ///< sensor frame, per-column stamps
   std::vector<std::uint32_t> labels;  ///< per cell: object id, 0 = background / no return
   core::Pose pose;                    ///< sensor in world at scan.stamp_ns (the first column)
-  std::vector<ObjectTruth> objects;   ///< every actor, sorted by id
+  std::vector<ObjectTruth> objects;   ///< every actor present in this scan, sorted by id
 };
 
 /// Scenario + seed -> deterministic sequence of scans (no disk access).
@@ -94,6 +94,7 @@ class Simulator {
   std::vector<Eigen::Vector3d> col_pos_;
   std::vector<std::uint32_t> bin_fill_;
   std::vector<ActorState> mid_states_;
+  std::vector<std::uint8_t> present_;  // per actor slot, this scan
 };
 
 /// Reference ray caster: tests every primitive for one ray (no bins); for tests.

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
@@ -24,8 +25,9 @@ Scenario quiet_scenario() {
   return s;
 }
 
+// Stands at (x, y) for the whole run (an actor exists from its first to its last waypoint).
 ScriptedActor standing(std::uint32_t id, double x, double y, ObjectClass c = ObjectClass::kPerson) {
-  return {id, c, {{0.0, {x, y, std::nan("")}}}};
+  return {id, c, {{0.0, {x, y, std::nan("")}}, {1000.0, {x, y, std::nan("")}}}};
 }
 
 TEST(Simulator, FlatGroundGivesEachRingItsRange) {
@@ -60,7 +62,7 @@ TEST(Simulator, HitPointsCarryTheirObjectsLabel) {
   Scenario s = quiet_scenario();
   s.scripted = {standing(3, 6.0, 0.0),
                 standing(7, -9.5, 0.0, ObjectClass::kRobot),
-                {9, ObjectClass::kDrone, {{0.0, {0.0, -5.0, 4.0}}}}};
+                {9, ObjectClass::kDrone, {{0.0, {0.0, -5.0, 4.0}}, {9.0, {0.0, -5.0, 4.0}}}}};
   Simulator sim(s, 1);
   const auto out = sim.next();
   std::map<std::uint32_t, int> counts;
@@ -149,7 +151,9 @@ TEST(Simulator, ScriptedTrajectoryIsFollowed) {
   // 1 m/s along +y at x = 8, then standing still.
   s.scripted = {{5,
                  ObjectClass::kPerson,
-                 {{0.0, {8.0, -4.0, std::nan("")}}, {8.0, {8.0, 4.0, std::nan("")}}}}};
+                 {{0.0, {8.0, -4.0, std::nan("")}},
+                  {8.0, {8.0, 4.0, std::nan("")}},
+                  {10.0, {8.0, 4.0, std::nan("")}}}}};
   Simulator sim(s, 3);
   for (int k = 0; k < 100; ++k) {
     const auto out = sim.next();
@@ -164,6 +168,164 @@ TEST(Simulator, ScriptedTrajectoryIsFollowed) {
     EXPECT_NEAR(o.centroid_m.x(), 8.0f, 0.35f);
     EXPECT_NEAR(o.centroid_m.y(), o.body_center_m.y(), 0.3f);
     EXPECT_EQ(o.moving, t_mid < 8.0);
+  }
+}
+
+TEST(Simulator, ScriptedActorsEnterAndLeave) {
+  Scenario s = quiet_scenario();
+  s.duration_s = 3.0;
+  // Walks 1 m/s along +y at x = 7 from t = 0.8 s to t = 2.0 s; absent before and after.
+  s.scripted = {{6,
+                 ObjectClass::kPerson,
+                 {{0.8, {7.0, -0.6, std::nan("")}}, {2.0, {7.0, 0.6, std::nan("")}}}},
+                standing(2, -6.0, 3.0)};
+  Simulator sim(s, 4);
+  int present_scans = 0;
+  for (std::int64_t k = 0; k < sim.scan_count(); ++k) {
+    const auto out = sim.next();
+    const double t_mid = static_cast<double>(out.scan.stamp_ns) * 1e-9 + 0.05;
+    const bool should_exist = t_mid >= 0.8 && t_mid <= 2.0;
+    const auto row = std::find_if(out.objects.begin(), out.objects.end(),
+                                  [](const ObjectTruth& o) { return o.id == 6; });
+    const bool labelled = std::find(out.labels.begin(), out.labels.end(), 6u) != out.labels.end();
+    EXPECT_EQ(row != out.objects.end(), should_exist) << "scan " << k;
+    EXPECT_EQ(labelled, should_exist) << "scan " << k;
+    if (should_exist) {
+      ++present_scans;
+      ASSERT_NE(row, out.objects.end());
+      EXPECT_GT(row->hit_points, 10) << "scan " << k;
+    }
+    // The one standing all the time is always there.
+    EXPECT_TRUE(std::any_of(out.objects.begin(), out.objects.end(),
+                            [](const ObjectTruth& o) { return o.id == 2; }))
+        << "scan " << k;
+  }
+  EXPECT_GE(present_scans, 11);
+  EXPECT_LE(present_scans, 13);
+}
+
+TEST(Simulator, ScriptedBodiesTakeTheirHeightWidthAndReflectivity) {
+  Scenario s = quiet_scenario();
+  ScriptedActor small = standing(1, 4.0, 0.0);
+  small.height_m = 1.5;
+  small.width_m = 0.4;
+  ScriptedActor tall = standing(2, -4.0, 0.0);
+  tall.height_m = 1.95;
+  tall.width_m = 0.9;
+  tall.reflectivity = 0.9;
+  ScriptedActor plain = standing(3, 0.0, 4.0);  // 1.75 m default
+  s.scripted = {small, tall, plain};
+  Simulator sim(s, 1);
+  std::map<std::uint32_t, float> max_z, min_y, max_y, intensity;
+  for (int k = 0; k < 3; ++k) {
+    const auto out = sim.next();
+    for (std::size_t i = 0; i < out.scan.size(); ++i) {
+      const std::uint32_t id = out.labels[i];
+      if (!out.scan.valid(i) || id == 0) continue;
+      const Eigen::Vector3f w = out.pose.to_world(out.scan.point(i));
+      max_z[id] = std::max(max_z.count(id) ? max_z[id] : -1e9f, w.z());
+      min_y[id] = std::min(min_y.count(id) ? min_y[id] : 1e9f, w.y());
+      max_y[id] = std::max(max_y.count(id) ? max_y[id] : -1e9f, w.y());
+      intensity[id] = std::max(intensity[id], out.scan.intensity(i));
+    }
+  }
+  ASSERT_EQ(max_z.size(), 3u);
+  // At 4 m the rings are 0.14 m apart: the top hit is within that of the head.
+  EXPECT_LE(max_z[1], 1.5f + 0.01f);  // the head tops h by 0.07 %
+  EXPECT_GT(max_z[1], 1.5f - 0.2f);
+  EXPECT_LE(max_z[2], 1.95f + 0.01f);
+  EXPECT_GT(max_z[2], 1.95f - 0.2f);
+  EXPECT_GT(max_z[2], max_z[1] + 0.25f);
+  EXPECT_LE(max_z[3], 1.75f + 0.01f);
+  EXPECT_GT(max_z[3], 1.75f - 0.2f);
+  // Facing +x (no motion), their shoulders span y: 0.4 m and 0.9 m.
+  EXPECT_LE(max_y[1] - min_y[1], 0.4f + 0.01f);
+  EXPECT_GT(max_y[2] - min_y[2], 0.7f);
+  EXPECT_GT(intensity[2], intensity[1] + 60.0f);
+}
+
+TEST(Scenario, PathSegmentsMustClearObstaclesAndTheSensor) {
+  const auto error_of = [](const Scenario& s) {
+    try {
+      validate(s, "v.yaml");
+    } catch (const core::ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string("(no error)");
+  };
+  Scenario s = quiet_scenario();
+  s.boxes.push_back({{10.0, 0.0}, {4.5, 1.8, 1.5}, 0.0, 0.0, 0.6});  // a parked car
+  // Both waypoints are well clear of the car; the straight segment between them crosses it.
+  s.scripted = {{3,
+                 ObjectClass::kPerson,
+                 {{0.0, {8.0, 5.0, std::nan("")}},
+                  {2.0, {8.0, 3.0, std::nan("")}},
+                  {6.0, {12.0, -3.0, std::nan("")}}}}};
+  const std::string crossing = error_of(s);
+  EXPECT_NE(crossing.find("v.yaml: trajectory of id 3: segment t=2-6 s from (8, 3) to (12, -3) "
+                          "crosses boxes[0]"),
+            std::string::npos)
+      << crossing;
+  // Around the car instead: accepted.
+  s.scripted[0].waypoints[2].xyz_m = {13.0, 3.0, std::nan("")};
+  s.scripted[0].waypoints.push_back({8.0, {13.0, -3.0, std::nan("")}});
+  EXPECT_EQ(error_of(s), "(no error)");
+  // Walking through the sensor's mast.
+  s.scripted[0].waypoints.push_back({14.0, {-3.0, 0.3, std::nan("")}});
+  const std::string mast = error_of(s);
+  EXPECT_NE(mast.find("segment t=8-14 s"), std::string::npos) << mast;
+  EXPECT_NE(mast.find("the sensor's keep-out zone"), std::string::npos) << mast;
+  // Past a post (cylinder).
+  s.scripted[0].waypoints.pop_back();
+  s.cylinders.push_back({{15.0, 0.0}, 0.15, 4.0, 0.0, 0.6});
+  s.scripted[0].waypoints.push_back({14.0, {17.0, 2.0, std::nan("")}});
+  const std::string post = error_of(s);
+  EXPECT_NE(post.find("segment t=8-14 s"), std::string::npos) << post;
+  EXPECT_NE(post.find("crosses cylinders[0]"), std::string::npos) << post;
+  // A single waypoint no longer means "stands all the time".
+  s.scripted[0].waypoints.resize(1);
+  EXPECT_NE(error_of(s).find("a single waypoint"), std::string::npos) << error_of(s);
+  // Body values out of range, or on a class without a body.
+  s.scripted = {standing(5, 20.0, 20.0)};
+  s.scripted[0].height_m = 2.7;
+  EXPECT_NE(error_of(s).find("id 5: height_m must be in [0.5, 2.5]"), std::string::npos)
+      << error_of(s);
+  s.scripted = {standing(5, 20.0, 20.0, ObjectClass::kRobot)};
+  s.scripted[0].width_m = 0.5;
+  EXPECT_NE(error_of(s).find("not to a robot"), std::string::npos) << error_of(s);
+}
+
+TEST(Scenario, MovingSensorPathMustClearSolids) {
+  Scenario s = quiet_scenario();
+  s.duration_s = 10.0;
+  s.sensor.motion = SensorMotion::kScripted;
+  s.sensor.keyframes = {{0.0, {0, 0, 2.5}, {0, 0, 0}}, {10.0, {20, 0, 2.5}, {0, 0, 0}}};
+  s.boxes.push_back({{12.0, 0.0}, {2.0, 2.0, 2.3}, 0.0, 0.0, 0.5});  // just below the flight
+  EXPECT_NO_THROW(validate(s, "f.yaml"));
+  s.boxes[0].size_m.z() = 3.0;  // now in the way
+  try {
+    validate(s, "f.yaml");
+    FAIL() << "no error";
+  } catch (const core::ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("f.yaml: sensor: scripted path at t="), std::string::npos) << what;
+    EXPECT_NE(what.find("passes through boxes[0]"), std::string::npos) << what;
+  }
+  // A lamp post at the tip of the figure 8 (x = R = 4 m, y = 0).
+  Scenario f = quiet_scenario();
+  f.sensor.motion = SensorMotion::kFigure8;
+  f.duration_s = 20.0;
+  f.cylinders.push_back({{3.95, 0.0}, 0.12, 6.0, 0.0, 0.6});
+  try {
+    validate(f, "f.yaml");
+    FAIL() << "no error";
+  } catch (const core::ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("figure8 path"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("cylinders[0]"), std::string::npos) << e.what();
+  }
+  // Every built-in flies clear.
+  for (const auto& info : builtin_scenarios()) {
+    EXPECT_NO_THROW(validate(with_moving_sensor(builtin_scenario(info.name)), info.name));
   }
 }
 
