@@ -1,5 +1,6 @@
 #include "support/naive_detection.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
@@ -32,6 +33,96 @@ bool linked(const core::OrganizedScan& scan, const core::DetectionConfig& config
   return std::abs(scan.range_m(a) - scan.range_m(b)) < theta;
 }
 
+// One cluster's cells with their world points.
+struct Part {
+  std::vector<std::uint32_t> cells;
+  std::vector<Eigen::Vector3d> world;
+};
+
+// The split step as documented: the histogram of the points' positions along the principal
+// horizontal axis, cut in the middle of the deepest valley bin, recursively.
+void split_part(const Part& part, int depth, const core::DetectionConfig& config,
+                const Eigen::Vector3d& sensor, double azimuth_step_rad, std::vector<Part>& out) {
+  const std::size_t n = part.cells.size();
+  if (config.split_min_width_m <= 0.0 || depth >= detection::kMaxSplitDepth || n < 2) {
+    out.push_back(part);
+    return;
+  }
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  for (const auto& w : part.world) mean += w.head<2>();
+  mean /= static_cast<double>(n);
+  Eigen::Matrix2d cov = Eigen::Matrix2d::Zero();
+  for (const auto& w : part.world) {
+    const Eigen::Vector2d d = w.head<2>() - mean;
+    cov += d * d.transpose();
+  }
+  // Eigenvector of the larger eigenvalue (the solver sorts them ascending), pointing to +x.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> solver(cov);
+  Eigen::Vector2d axis = solver.eigenvectors().col(1);
+  if (axis.x() < 0.0 || (axis.x() == 0.0 && axis.y() < 0.0)) axis = -axis;
+
+  std::vector<double> position;
+  for (const auto& w : part.world) position.push_back(axis.dot(w.head<2>() - mean));
+  double lo = 1e300, hi = -1e300;
+  for (const double p : position) {
+    lo = std::min(lo, p);
+    hi = std::max(hi, p);
+  }
+  if (hi - lo <= config.split_min_width_m) {
+    out.push_back(part);
+    return;
+  }
+  // Bin width: split_bin_m, or two column spacings along the axis at the part's distance.
+  const Eigen::Vector2d to_part = mean - sensor.head<2>();
+  const double distance = to_part.norm();
+  double cos_incidence = 1.0;
+  if (distance > 0.0) {
+    const Eigen::Vector2d tangent(-to_part.y() / distance, to_part.x() / distance);
+    cos_incidence = std::max(std::abs(axis.dot(tangent)), 0.25);
+  }
+  const double bin =
+      std::max(config.split_bin_m, 2.0 * distance * azimuth_step_rad / cos_incidence);
+  const int bins = static_cast<int>(std::floor((hi - lo) / bin)) + 1;
+  std::vector<long> count(static_cast<std::size_t>(bins), 0);
+  for (const double p : position) {
+    const int b = std::min(static_cast<int>(std::floor((p - lo) / bin)), bins - 1);
+    ++count[static_cast<std::size_t>(b)];
+  }
+  // Every interior bin is a candidate valley; its peak is the smaller of the highest bins on
+  // its two sides. Keep the candidate with the smallest count / peak, the first on ties.
+  int best = -1;
+  double best_score = 2.0;
+  for (int v = 1; v + 1 < bins; ++v) {
+    long left = 0, right = 0;
+    for (int b = 0; b < v; ++b) left = std::max(left, count[static_cast<std::size_t>(b)]);
+    for (int b = v + 1; b < bins; ++b) right = std::max(right, count[static_cast<std::size_t>(b)]);
+    const long peak = std::min(left, right);
+    const long c = count[static_cast<std::size_t>(v)];
+    if (c >= peak ||
+        static_cast<double>(c) > config.split_valley_ratio * static_cast<double>(peak)) {
+      continue;
+    }
+    const double score = static_cast<double>(c) / static_cast<double>(peak);
+    if (score < best_score) {
+      best = v;
+      best_score = score;
+    }
+  }
+  if (best < 0) {
+    out.push_back(part);
+    return;
+  }
+  const double cut = lo + (best + 0.5) * bin;
+  Part left, right;
+  for (std::size_t k = 0; k < n; ++k) {
+    Part& side = position[k] < cut ? left : right;
+    side.cells.push_back(part.cells[k]);
+    side.world.push_back(part.world[k]);
+  }
+  split_part(left, depth + 1, config, sensor, azimuth_step_rad, out);
+  split_part(right, depth + 1, config, sensor, azimuth_step_rad, out);
+}
+
 }  // namespace
 
 std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
@@ -61,18 +152,25 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
   }
 
   const Eigen::Isometry3d world_T_sensor = pose.isometry();
-  std::vector<core::Detection> out;
+  const double azimuth_step_rad = 2.0 * std::numbers::pi / scan.columns();
+  std::vector<Part> parts;
   for (auto& [root, cells] : components) {
+    Part whole;
+    whole.cells = cells;
+    for (const auto i : cells) whole.world.push_back(world_T_sensor * scan.point(i).cast<double>());
+    split_part(whole, 0, config, pose.translation, azimuth_step_rad, parts);
+  }
+
+  std::vector<core::Detection> out;
+  for (auto& [cells, world] : parts) {
     // Below min_cluster_points a cluster can only be relaxed, from relaxed_min_cluster_points.
     const bool small = cells.size() < static_cast<std::size_t>(config.min_cluster_points);
     if (small && cells.size() < static_cast<std::size_t>(config.relaxed_min_cluster_points)) {
       continue;
     }
-    std::vector<Eigen::Vector3d> world;
     bool edge_ring = false;
     double range_sum = 0;
     for (const auto i : cells) {
-      world.push_back(world_T_sensor * scan.point(i).cast<double>());
       edge_ring = edge_ring || scan.ring_of(i) == 0 || scan.ring_of(i) == scan.rings() - 1;
       range_sum += scan.range_m(i);
     }
@@ -124,6 +222,9 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
     d.relaxed = !strict;
     out.push_back(std::move(d));
   }
+  std::sort(out.begin(), out.end(), [](const core::Detection& a, const core::Detection& b) {
+    return a.indices.front() < b.indices.front();
+  });
   return out;
 }
 
