@@ -39,8 +39,8 @@ struct Part {
   std::vector<Eigen::Vector3d> world;
 };
 
-// The split step as documented: the histogram of the points' positions along the principal
-// horizontal axis, cut in the middle of the deepest valley bin, recursively.
+// The split step as documented: the coverage profile of the points along the principal
+// horizontal axis, cut in the middle of the deepest valley window, recursively.
 void split_part(const Part& part, int depth, const core::DetectionConfig& config,
                 const Eigen::Vector3d& sensor, double azimuth_step_rad, std::vector<Part>& out) {
   const std::size_t n = part.cells.size();
@@ -72,47 +72,73 @@ void split_part(const Part& part, int depth, const core::DetectionConfig& config
     out.push_back(part);
     return;
   }
-  // Bin width: split_bin_m, or two column spacings along the axis at the part's distance.
-  const Eigen::Vector2d to_part = mean - sensor.head<2>();
-  const double distance = to_part.norm();
-  double cos_incidence = 1.0;
-  if (distance > 0.0) {
-    const Eigen::Vector2d tangent(-to_part.y() / distance, to_part.x() / distance);
-    cos_incidence = std::max(std::abs(axis.dot(tangent)), 0.25);
+  // Coverage: point k stands for the interval of its footprint (horizontal distance * azimuth
+  // step / |cos| of the angle between axis and tangential direction, |cos| >= 0.25) around its
+  // position, with unit mass spread evenly. A window's mass is the mass of all points inside it.
+  const double bin = config.split_bin_m;
+  const double sub = bin / static_cast<double>(detection::kSubBins);
+  const int sub_bins = static_cast<int>(std::floor((hi - lo) / sub)) + 1;
+  const int per_window = static_cast<int>(detection::kSubBins);
+  std::vector<double> from(n), to(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const Eigen::Vector2d d = part.world[k].head<2>() - sensor.head<2>();
+    const double h = d.norm();
+    double footprint = 0.0;
+    if (h > 0.0) {
+      const Eigen::Vector2d tangent(-d.y() / h, d.x() / h);
+      footprint = h * azimuth_step_rad / std::max(std::abs(axis.dot(tangent)), 0.25);
+    }
+    from[k] = position[k] - 0.5 * footprint;
+    to[k] = position[k] + 0.5 * footprint;
   }
-  const double bin =
-      std::max(config.split_bin_m, 2.0 * distance * azimuth_step_rad / cos_incidence);
-  const int bins = static_cast<int>(std::floor((hi - lo) / bin)) + 1;
-  std::vector<long> count(static_cast<std::size_t>(bins), 0);
-  for (const double p : position) {
-    const int b = std::min(static_cast<int>(std::floor((p - lo) / bin)), bins - 1);
-    ++count[static_cast<std::size_t>(b)];
-  }
-  // Every interior bin is a candidate valley; its peak is the smaller of the highest bins on
-  // its two sides. Keep the candidate with the smallest count / peak, the first on ties.
+  // The profile covers [lo, lo + sub_bins * sub); mass outside it is lost.
+  const double end = lo + sub_bins * sub;
+  auto window_mass = [&](int j) {
+    const double a = lo + j * sub, b = lo + (j + per_window) * sub;
+    double mass = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      if (to[k] - from[k] <= 2e-9 * sub) {  // no footprint: a point mass in its sub-bin
+        const int s =
+            std::min(static_cast<int>(std::floor((position[k] - lo) / sub)), sub_bins - 1);
+        if (s >= j && s < j + per_window) mass += 1.0;
+        continue;
+      }
+      const double x0 = std::max({from[k], a, lo}), x1 = std::min({to[k], b, end});
+      if (x1 > x0) mass += (x1 - x0) / (to[k] - from[k]);
+    }
+    return mass;
+  };
+  const int windows = sub_bins - per_window + 1;
+  std::vector<double> mass(static_cast<std::size_t>(std::max(windows, 0)));
+  for (int j = 0; j < windows; ++j) mass[static_cast<std::size_t>(j)] = window_mass(j);
+  // Every window with a whole window left and right of it is a candidate valley; its peak is
+  // the smaller of the highest such windows on its two sides. Keep the smallest mass / peak,
+  // the first on ties (within 1e-9).
   int best = -1;
   double best_score = 2.0;
-  for (int v = 1; v + 1 < bins; ++v) {
-    long left = 0, right = 0;
-    for (int b = 0; b < v; ++b) left = std::max(left, count[static_cast<std::size_t>(b)]);
-    for (int b = v + 1; b < bins; ++b) right = std::max(right, count[static_cast<std::size_t>(b)]);
-    const long peak = std::min(left, right);
-    const long c = count[static_cast<std::size_t>(v)];
-    if (c >= peak ||
-        static_cast<double>(c) > config.split_valley_ratio * static_cast<double>(peak)) {
-      continue;
-    }
-    const double score = static_cast<double>(c) / static_cast<double>(peak);
-    if (score < best_score) {
-      best = v;
-      best_score = score;
+  if (sub_bins >= 3 * per_window) {
+    for (int j = per_window; j + per_window < windows; ++j) {
+      double left = 0, right = 0;
+      for (int q = 0; q <= j - per_window; ++q)
+        left = std::max(left, mass[static_cast<std::size_t>(q)]);
+      for (int q = j + per_window; q < windows; ++q) {
+        right = std::max(right, mass[static_cast<std::size_t>(q)]);
+      }
+      const double peak = std::min(left, right);
+      const double c = mass[static_cast<std::size_t>(j)];
+      if (!(c < peak) || c > config.split_valley_ratio * peak) continue;
+      const double score = c / peak;
+      if (score < best_score - 1e-9) {
+        best = j;
+        best_score = score;
+      }
     }
   }
   if (best < 0) {
     out.push_back(part);
     return;
   }
-  const double cut = lo + (best + 0.5) * bin;
+  const double cut = lo + (best + 0.5 * per_window) * sub;
   Part left, right;
   for (std::size_t k = 0; k < n; ++k) {
     Part& side = position[k] < cut ? left : right;

@@ -265,50 +265,68 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
   const double extent = p_max - p_min;
   if (!(extent > config_.split_min_width_m)) return false;
 
-  // Bins at least two column spacings wide along the axis: a bin then holds 2..3 columns of a
-  // uniform surface (ratio >= 2/3), never 1 next to 2 (ratio 1/2, a false valley). The spacing
-  // along the axis grows as the axis turns away from the tangential direction.
-  const double sx = mx - frame.translation.x(), sy = my - frame.translation.y();
-  const double distance = std::hypot(sx, sy);
-  const double cos_incidence =
-      distance > 0.0 ? std::max(std::abs(ax * -sy + ay * sx) / distance, 0.25) : 1.0;
-  const double bin =
-      std::max(config_.split_bin_m, 2.0 * distance * frame.azimuth_step_rad / cos_incidence);
-  const auto bins = static_cast<std::size_t>(extent / bin) + 1;
-  if (bins < 3) return false;
-  histogram_.assign(bins, 0);
+  // Coverage profile along the axis: each point stands for the stretch of surface between it
+  // and its neighbouring columns, its footprint (horizontal distance * azimuth step, longer as
+  // the axis turns away from the tangential direction, at most 4x), and spreads its unit mass
+  // evenly over it. A uniformly sampled surface then has a flat profile whatever the range,
+  // angle and bin width (point counts per bin alias: 1 column next to 2), and a gap between two
+  // people is a hole as wide as the columns missing there.
+  const double sub = config_.split_bin_m / kSubBins;
+  const auto sub_bins = static_cast<std::size_t>(extent / sub) + 1;
+  if (sub_bins < 3 * kSubBins) return false;  // no window with a full window either side
+  coverage_.assign(sub_bins, 0.0);
+  const double tx = frame.translation.x(), ty = frame.translation.y();
   for (std::size_t k = 0; k < m; ++k) {
-    const auto b = std::min(static_cast<std::size_t>((projection_[k] - p_min) / bin), bins - 1);
-    ++histogram_[b];
-  }
-  left_max_.resize(bins);
-  std::uint32_t running = 0;
-  for (std::size_t b = 0; b < bins; ++b) {
-    left_max_[b] = running;
-    running = std::max(running, histogram_[b]);
-  }
-  // Deepest valley: the smallest count / (smaller of the highest bins left and right), ties to
-  // the first; compared as integer cross products, exactly.
-  std::size_t best = 0;
-  std::uint64_t best_count = 0, best_peak = 0;
-  std::uint32_t right_max = 0;
-  for (std::size_t b = bins - 1; b-- > 1;) {
-    right_max = std::max(right_max, histogram_[b + 1]);
-    const std::uint64_t peak = std::min(left_max_[b], right_max);
-    const std::uint64_t count = histogram_[b];
-    if (count >= peak ||
-        static_cast<double>(count) > config_.split_valley_ratio * static_cast<double>(peak)) {
+    const double dx = world_[begin + k].x() - tx, dy = world_[begin + k].y() - ty;
+    const double h = std::hypot(dx, dy);
+    const double footprint =
+        h * h * frame.azimuth_step_rad / std::max(std::abs(ay * dx - ax * dy), 0.25 * h);
+    const double u = (projection_[k] - p_min) / sub;
+    const double half = 0.5 * footprint / sub;
+    if (!(half > 1e-9)) {
+      coverage_[std::min(static_cast<std::size_t>(u), sub_bins - 1)] += 1.0;
       continue;
     }
-    // Scanning right to left, "<=" moves ties to the first (lowest) bin.
-    if (best == 0 || count * best_peak <= best_count * peak) {
-      best = b;
-      best_count = count;
-      best_peak = peak;
+    const double u0 = std::max(u - half, 0.0);
+    const double u1 = std::min(u + half, static_cast<double>(sub_bins));
+    const double density = 1.0 / (2.0 * half);
+    for (auto j = static_cast<std::size_t>(u0); j < sub_bins && static_cast<double>(j) < u1; ++j) {
+      const double overlap =
+          std::min(u1, static_cast<double>(j + 1)) - std::max(u0, static_cast<double>(j));
+      if (overlap > 0.0) coverage_[j] += overlap * density;
     }
   }
-  if (best == 0) return false;
-  cut = p_min + (static_cast<double>(best) + 0.5) * bin;
+  // Sliding windows of one bin (kSubBins sub-bins), one sub-bin apart; a valley window's peaks
+  // are the highest windows entirely left and entirely right of it.
+  const std::size_t windows = sub_bins - kSubBins + 1;
+  window_.resize(windows);
+  for (std::size_t j = 0; j < windows; ++j) {
+    double w = 0.0;
+    for (std::size_t q = 0; q < kSubBins; ++q) w += coverage_[j + q];
+    window_[j] = w;
+  }
+  left_max_.assign(windows, 0.0);
+  for (std::size_t j = kSubBins; j < windows; ++j) {
+    left_max_[j] = std::max(left_max_[j - 1], window_[j - kSubBins]);
+  }
+  // Deepest valley: the smallest window / (smaller peak); ties (within 1e-9) to the first.
+  // Scanning right to left with right_max over windows j + kSubBins.. .
+  std::size_t best = windows;
+  double best_score = 2.0;
+  double right_max = 0.0;
+  for (std::size_t j = windows - kSubBins; j-- > kSubBins;) {
+    right_max = std::max(right_max, window_[j + kSubBins]);
+    const double peak = std::min(left_max_[j], right_max);
+    const double w = window_[j];
+    if (!(w < peak) || w > config_.split_valley_ratio * peak) continue;
+    const double score = w / peak;
+    if (score <= best_score + 1e-9) {
+      best = j;
+      best_score = std::min(score, best_score);
+    }
+  }
+  if (best == windows) return false;
+  cut = p_min + (static_cast<double>(best) + 0.5 * kSubBins) * sub;
   return true;
 }
 

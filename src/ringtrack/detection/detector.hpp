@@ -37,6 +37,8 @@ struct DetectorStats {
 
 /// Most levels of the split step's recursion (at most 2^kMaxSplitDepth parts per cluster).
 inline constexpr int kMaxSplitDepth = 4;
+/// Sub-bins per split_bin_m bin: the split's sliding window moves by a quarter bin.
+inline constexpr std::size_t kSubBins = 4;
 
 /// Clusters the segment points of a scan by region growing on the rings x columns grid and keeps
 /// the clusters that fit the object model in the world frame.
@@ -123,8 +125,9 @@ class Detector {
   std::vector<Range> split_stack_;  // parts of the cluster still to be examined
   std::vector<Range> parts_;        // final parts of the cluster (ranges of cluster_, world_)
   std::vector<double> projection_;  // per point of the part: position on its principal axis
-  std::vector<std::uint32_t> histogram_;
-  std::vector<std::uint32_t> left_max_;  // per bin: highest bin count strictly left of it
+  std::vector<double> coverage_;    // split: coverage profile along the axis, per sub-bin
+  std::vector<double> window_;      // split: coverage per sliding window of one bin
+  std::vector<double> left_max_;    // split: per window, the highest window entirely left of it
   std::vector<core::Detection> detections_;
   std::vector<core::Detection> spare_;  // detections from earlier calls, kept for their buffers
   DetectorStats stats_;
