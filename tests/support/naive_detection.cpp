@@ -72,6 +72,15 @@ void split_part(const Part& part, int depth, const core::DetectionConfig& config
     out.push_back(part);
     return;
   }
+  // Only axes within 60 degrees of the tangential direction at the centroid.
+  {
+    const Eigen::Vector2d c = mean - sensor.head<2>();
+    const Eigen::Vector2d tangent(-c.y(), c.x());
+    if (!(std::abs(axis.dot(tangent)) >= detection::kSplitMinAxisCos * c.norm())) {
+      out.push_back(part);
+      return;
+    }
+  }
   // Coverage: point k stands for the interval of its footprint (horizontal distance * azimuth
   // step / |cos| of the angle between axis and tangential direction, |cos| >= 0.25) around its
   // position, with unit mass spread evenly. A window's mass is the mass of all points inside it.
@@ -144,6 +153,12 @@ void split_part(const Part& part, int depth, const core::DetectionConfig& config
     Part& side = position[k] < cut ? left : right;
     side.cells.push_back(part.cells[k]);
     side.world.push_back(part.world[k]);
+  }
+  // Both parts must have min_cluster_points points, else the cluster stays whole.
+  const auto min_points = static_cast<std::size_t>(config.min_cluster_points);
+  if (left.cells.size() < min_points || right.cells.size() < min_points) {
+    out.push_back(part);
+    return;
   }
   split_part(left, depth + 1, config, sensor, azimuth_step_rad, out);
   split_part(right, depth + 1, config, sensor, azimuth_step_rad, out);

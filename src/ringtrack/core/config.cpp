@@ -194,11 +194,12 @@ class Schema {
            "the deepest density valley between two modes (people side by side), recursively; each "
            "part meets the object model on its own (m; 0 disables splitting)");
     number("split_bin_m", d.split_bin_m, 0.01, 10.0,
-           "histogram bin along the principal axis for the split (m); widened to two column "
-           "spacings at the cluster's range so uniform surfaces never show valleys");
+           "width of the split's sliding window along the principal axis (m), moved by a quarter "
+           "of it over the points' coverage profile (each point spread over its column's "
+           "footprint, so uniformly sampled surfaces have a flat profile)");
     number("split_valley_ratio", d.split_valley_ratio, 0.0, 0.99,
-           "a valley bin splits a cluster when its point count is at most this fraction of the "
-           "smaller of the highest bins on either side");
+           "a valley window splits a cluster when its coverage is at most this fraction of the "
+           "smaller of the highest windows on either side");
 
     auto& t = c.tracking;
     section_ = "tracking";

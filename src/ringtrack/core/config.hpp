@@ -46,8 +46,8 @@ struct DetectionConfig {
   double min_position_stddev_m{0.03};  // floor on each axis of a detection's covariance
   double split_min_width_m{0.9};       // clusters wider than this (along their principal horizontal
                                        // axis) are split at a density valley; 0 = no splitting
-  double split_bin_m{0.1};             // smallest histogram bin of the split (widened to 2 columns)
-  double split_valley_ratio{0.5};      // a valley splits when its count <= this * the smaller peak
+  double split_bin_m{0.1};             // width of the split's sliding window along the axis
+  double split_valley_ratio{0.5};      // a valley splits at coverage <= this * the smaller peak
 };
 
 /// Cost of pairing a detection with a hypothesis in the assignment (paper III.D).

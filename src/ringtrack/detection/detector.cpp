@@ -250,7 +250,7 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
     syy += dy * dy;
   }
   // Principal axis of the 2x2 covariance in closed form; the angle lies in (-pi/2, pi/2], so
-  // the axis points to +x (a canonical sign: the histogram and its tie-breaks do not depend on
+  // the axis points to +x (a canonical sign: the profile and its tie-breaks do not depend on
   // how the axis was found).
   const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
   const double ax = std::cos(angle), ay = std::sin(angle);
@@ -264,6 +264,13 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
   }
   const double extent = p_max - p_min;
   if (!(extent > config_.split_min_width_m)) return false;
+  // People side by side spread across the line of sight. Along it, the points are spaced by
+  // the rings, not the columns: sparse samples of sloped or deep structures that the footprint
+  // below cannot model, and people one behind the other are the join rule's business.
+  const double tx = frame.translation.x(), ty = frame.translation.y();
+  const double cx = mx - tx, cy = my - ty;
+  const double centre_distance = std::hypot(cx, cy);
+  if (!(std::abs(ay * cx - ax * cy) >= kSplitMinAxisCos * centre_distance)) return false;
 
   // Coverage profile along the axis: each point stands for the stretch of surface between it
   // and its neighbouring columns, its footprint (horizontal distance * azimuth step, longer as
@@ -275,7 +282,6 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
   const auto sub_bins = static_cast<std::size_t>(extent / sub) + 1;
   if (sub_bins < 3 * kSubBins) return false;  // no window with a full window either side
   coverage_.assign(sub_bins, 0.0);
-  const double tx = frame.translation.x(), ty = frame.translation.y();
   for (std::size_t k = 0; k < m; ++k) {
     const double dx = world_[begin + k].x() - tx, dy = world_[begin + k].y() - ty;
     const double h = std::hypot(dx, dy);
@@ -327,7 +333,11 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
   }
   if (best == windows) return false;
   cut = p_min + (static_cast<double>(best) + 0.5 * kSubBins) * sub;
-  return true;
+  // Both parts must be clusters in their own right.
+  std::size_t left = 0;
+  for (std::size_t k = 0; k < m; ++k) left += projection_[k] < cut ? 1 : 0;
+  const auto min_points = static_cast<std::size_t>(config_.min_cluster_points);
+  return left >= min_points && m - left >= min_points;
 }
 
 void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,

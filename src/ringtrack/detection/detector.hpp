@@ -37,6 +37,9 @@ struct DetectorStats {
 
 /// Most levels of the split step's recursion (at most 2^kMaxSplitDepth parts per cluster).
 inline constexpr int kMaxSplitDepth = 4;
+/// The split only examines clusters whose principal axis is at most 60 degrees from the
+/// tangential direction (|cos| >= this): people side by side spread across the line of sight.
+inline constexpr double kSplitMinAxisCos = 0.5;
 /// Sub-bins per split_bin_m bin: the split's sliding window moves by a quarter bin.
 inline constexpr std::size_t kSubBins = 4;
 
@@ -49,11 +52,13 @@ inline constexpr std::size_t kSubBins = 4;
 /// wrap, an object cut by the seam is one cluster without a separate fusion step.
 ///
 /// Split: a cluster whose extent along its principal horizontal axis exceeds split_min_width_m
-/// is cut at the deepest density valley of its points' histogram along that axis, when the
-/// valley holds at most split_valley_ratio times the smaller of the highest bins on either
-/// side (two people side by side, whom the range-difference join merges); the parts are split
-/// again while still too wide, up to kMaxSplitDepth levels. Bins are split_bin_m wide, widened
-/// to two column spacings at the cluster's range, so a uniformly sampled surface has no valley.
+/// (axis within 60 degrees of the tangential direction) is cut at the deepest valley of its
+/// coverage profile along that axis (each point spread over its column footprint, so a
+/// uniformly sampled surface is flat), found with a split_bin_m window sliding by a quarter
+/// bin, when the valley holds at most split_valley_ratio times the smaller of the highest
+/// windows on either side and both parts have min_cluster_points (two people side by side,
+/// whom the range-difference join merges); the parts are split again while still too wide, up
+/// to kMaxSplitDepth levels.
 ///
 /// Object model (world frame, each part of a split cluster on its own): vertical extent in
 /// [min_height_m, max_height_m], horizontal box diagonal <= max_diagonal_m, lowest point <=
