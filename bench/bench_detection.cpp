@@ -41,6 +41,20 @@ void BM_Detect10People(benchmark::State& state) {
   state.counters["segment_points"] = static_cast<double>(detector.stats().segment_points);
 }
 
+// The same with the split step off (split_min_width_m = 0), to show its cost.
+void BM_Detect10PeopleNoSplit(benchmark::State& state) {
+  const auto& s = ten_people();
+  core::DetectionConfig config;
+  config.split_min_width_m = 0.0;
+  detection::Detector detector{config};
+  const core::Pose pose;
+  detector.detect(s.rendered.scan, s.labels, pose);
+  for (auto _ : state) {
+    const auto& detections = detector.detect(s.rendered.scan, s.labels, pose);
+    benchmark::DoNotOptimize(detections.data());
+  }
+}
+
 // The O(n^2) union-find reference on the same scan, for scale.
 void BM_Detect10PeopleNaive(benchmark::State& state) {
   const auto& s = ten_people();
@@ -53,6 +67,10 @@ void BM_Detect10PeopleNaive(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_Detect10People)
+    ->Unit(benchmark::kMicrosecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_Detect10PeopleNoSplit)
     ->Unit(benchmark::kMicrosecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);

@@ -10,12 +10,15 @@
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
+#include "ringtrack/detection/detector.hpp"
 
 namespace ringtrack::testing {
 
 /// Detections as paper III.C defines them: two segment points (label 1, valid) are linked when
 /// their grid distance |d_ring| + circular |d_column| is at most neighbor_radius and the join
-/// rule holds; clusters are the connected components; the object model then filters them
+/// rule holds; clusters are the connected components; each is split at density valleys along
+/// its principal horizontal axis while wider than split_min_width_m (up to
+/// detection::kMaxSplitDepth levels); the object model then filters the parts
 /// (clusters below min_cluster_points only as relaxed detections, from
 /// relaxed_min_cluster_points points).
 /// Ordered by smallest grid index, indices ascending. O(segment points^2).

@@ -189,6 +189,17 @@ class Schema {
            "may use the relaxed model (m)");
     number("min_position_stddev_m", d.min_position_stddev_m, 1e-6, 10.0,
            "floor on each axis of a detection's position standard deviation (m)");
+    number("split_min_width_m", d.split_min_width_m, 0.0, 100.0,
+           "a cluster whose extent along its principal horizontal axis exceeds this is split at "
+           "the deepest density valley between two modes (people side by side), recursively; each "
+           "part meets the object model on its own (m; 0 disables splitting)");
+    number("split_bin_m", d.split_bin_m, 0.01, 10.0,
+           "width of the split's sliding window along the principal axis (m), moved by a quarter "
+           "of it over the points' coverage profile (each point spread over its column's "
+           "footprint, so uniformly sampled surfaces have a flat profile)");
+    number("split_valley_ratio", d.split_valley_ratio, 0.0, 0.99,
+           "a valley window splits a cluster when its coverage is at most this fraction of the "
+           "smaller of the highest windows on either side");
 
     auto& t = c.tracking;
     section_ = "tracking";

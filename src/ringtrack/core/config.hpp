@@ -44,6 +44,10 @@ struct DetectionConfig {
   double relaxed_max_diagonal_m{1.8};   // relaxed model near predicted tracks (no minimum height)
   double relaxed_radius_m{0.8};  // a cluster this close to a prediction uses the relaxed model
   double min_position_stddev_m{0.03};  // floor on each axis of a detection's covariance
+  double split_min_width_m{0.9};       // clusters wider than this (along their principal horizontal
+                                       // axis) are split at a density valley; 0 = no splitting
+  double split_bin_m{0.1};             // width of the split's sliding window along the axis
+  double split_valley_ratio{0.5};      // a valley splits at coverage <= this * the smaller peak
 };
 
 /// Cost of pairing a detection with a hypothesis in the assignment (paper III.D).

@@ -25,6 +25,7 @@ struct Detector::Frame {
   Eigen::Matrix3d rotation{Eigen::Matrix3d::Identity()};
   Eigen::Vector3d translation{Eigen::Vector3d::Zero()};
   const std::vector<Eigen::Vector3f>* predictions{nullptr};
+  double azimuth_step_rad{0.0};  // column spacing, for the split's bin width
 };
 
 Detector::Detector(const core::DetectionConfig& config) : config_(config) {
@@ -41,6 +42,15 @@ Detector::Detector(const core::DetectionConfig& config) : config_(config) {
   }
   if (!(config_.min_height_ring_gap_deg >= 0.0 && config_.min_height_ring_gap_deg < 90.0)) {
     throw core::ConfigError("key 'detection.min_height_ring_gap_deg' must lie in [0, 90)");
+  }
+  if (!(config_.split_min_width_m >= 0.0)) {
+    throw core::ConfigError("key 'detection.split_min_width_m' must not be negative");
+  }
+  if (!(config_.split_bin_m > 0.0)) {
+    throw core::ConfigError("key 'detection.split_bin_m' must be positive");
+  }
+  if (!(config_.split_valley_ratio >= 0.0 && config_.split_valley_ratio < 1.0)) {
+    throw core::ConfigError("key 'detection.split_valley_ratio' must lie in [0, 1)");
   }
   const auto theta = static_cast<float>(config_.join_distance_m);
   join_threshold_ = config_.join_rule == core::JoinRule::kEuclidean ? theta * theta : theta;
@@ -157,7 +167,182 @@ core::Detection& Detector::next_detection() {
 void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame) {
   const std::size_t n = cluster_.size();
   // A cluster below min_cluster_points may still confirm a track (a far person hit by one or
-  // two beams) when it has relaxed_min_cluster_points and lies near a prediction.
+  // two beams) when it has relaxed_min_cluster_points and lies near a prediction. Parts of a
+  // split are smaller still, so such a cluster is not examined further.
+  const bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
+  if (small && (n < static_cast<std::size_t>(config_.relaxed_min_cluster_points) ||
+                frame.predictions->empty())) {
+    ++stats_.too_small;
+    return;
+  }
+
+  const float* x = scan.xs().data();
+  const float* y = scan.ys().data();
+  const float* z = scan.zs().data();
+  world_.resize(n);
+  double lo_x = std::numeric_limits<double>::infinity(), hi_x = -lo_x;
+  double lo_y = lo_x, hi_y = -lo_x;
+  for (std::size_t k = 0; k < n; ++k) {
+    const std::uint32_t i = cluster_[k];
+    const Eigen::Vector3d w =
+        frame.rotation * Eigen::Vector3d(x[i], y[i], z[i]) + frame.translation;
+    world_[k] = w;
+    lo_x = std::min(lo_x, w.x());
+    hi_x = std::max(hi_x, w.x());
+    lo_y = std::min(lo_y, w.y());
+    hi_y = std::max(hi_y, w.y());
+  }
+  // The extent along any horizontal axis is at most the box diagonal: person-sized clusters
+  // (nearly all of them) skip the split without computing an axis.
+  if (config_.split_min_width_m > 0.0 &&
+      std::hypot(hi_x - lo_x, hi_y - lo_y) > config_.split_min_width_m) {
+    split_cluster(frame);
+    for (const Range& part : parts_) evaluate_part(scan, frame, part.begin, part.end);
+  } else {
+    evaluate_part(scan, frame, 0, n);
+  }
+}
+
+void Detector::split_cluster(const Frame& frame) {
+  // Depth-first over the parts with an explicit stack; a cut partitions the part's run of
+  // cluster_ and world_ in place, so the parts stay contiguous runs.
+  parts_.clear();
+  split_stack_.clear();
+  split_stack_.push_back({0, cluster_.size(), 0});
+  while (!split_stack_.empty()) {
+    const Range r = split_stack_.back();
+    split_stack_.pop_back();
+    double cut = 0.0;
+    if (r.depth >= kMaxSplitDepth || !find_split(frame, r.begin, r.end, cut)) {
+      parts_.push_back(r);
+      continue;
+    }
+    std::size_t mid = r.begin;
+    for (std::size_t k = r.begin; k < r.end; ++k) {
+      if (projection_[k - r.begin] < cut) {
+        std::swap(world_[mid], world_[k]);
+        std::swap(cluster_[mid], cluster_[k]);
+        std::swap(projection_[mid - r.begin], projection_[k - r.begin]);
+        ++mid;
+      }
+    }
+    ++stats_.splits;
+    split_stack_.push_back({mid, r.end, r.depth + 1});
+    split_stack_.push_back({r.begin, mid, r.depth + 1});
+  }
+}
+
+bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end, double& cut) {
+  const std::size_t m = end - begin;
+  if (m < 2) return false;
+  double mx = 0.0, my = 0.0;
+  for (std::size_t k = begin; k < end; ++k) {
+    mx += world_[k].x();
+    my += world_[k].y();
+  }
+  mx /= static_cast<double>(m);
+  my /= static_cast<double>(m);
+  double sxx = 0.0, sxy = 0.0, syy = 0.0;
+  for (std::size_t k = begin; k < end; ++k) {
+    const double dx = world_[k].x() - mx, dy = world_[k].y() - my;
+    sxx += dx * dx;
+    sxy += dx * dy;
+    syy += dy * dy;
+  }
+  // Principal axis of the 2x2 covariance in closed form; the angle lies in (-pi/2, pi/2], so
+  // the axis points to +x (a canonical sign: the profile and its tie-breaks do not depend on
+  // how the axis was found).
+  const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
+  const double ax = std::cos(angle), ay = std::sin(angle);
+  projection_.resize(m);
+  double p_min = std::numeric_limits<double>::infinity(), p_max = -p_min;
+  for (std::size_t k = begin; k < end; ++k) {
+    const double p = ax * (world_[k].x() - mx) + ay * (world_[k].y() - my);
+    projection_[k - begin] = p;
+    p_min = std::min(p_min, p);
+    p_max = std::max(p_max, p);
+  }
+  const double extent = p_max - p_min;
+  if (!(extent > config_.split_min_width_m)) return false;
+  // People side by side spread across the line of sight. Along it, the points are spaced by
+  // the rings, not the columns: sparse samples of sloped or deep structures that the footprint
+  // below cannot model, and people one behind the other are the join rule's business.
+  const double tx = frame.translation.x(), ty = frame.translation.y();
+  const double cx = mx - tx, cy = my - ty;
+  const double centre_distance = std::hypot(cx, cy);
+  if (!(std::abs(ay * cx - ax * cy) >= kSplitMinAxisCos * centre_distance)) return false;
+
+  // Coverage profile along the axis: each point stands for the stretch of surface between it
+  // and its neighbouring columns, its footprint (horizontal distance * azimuth step, longer as
+  // the axis turns away from the tangential direction, at most 4x), and spreads its unit mass
+  // evenly over it. A uniformly sampled surface then has a flat profile whatever the range,
+  // angle and bin width (point counts per bin alias: 1 column next to 2), and a gap between two
+  // people is a hole as wide as the columns missing there.
+  const double sub = config_.split_bin_m / kSubBins;
+  const auto sub_bins = static_cast<std::size_t>(extent / sub) + 1;
+  if (sub_bins < 3 * kSubBins) return false;  // no window with a full window either side
+  coverage_.assign(sub_bins, 0.0);
+  for (std::size_t k = 0; k < m; ++k) {
+    const double dx = world_[begin + k].x() - tx, dy = world_[begin + k].y() - ty;
+    const double h = std::hypot(dx, dy);
+    const double footprint =
+        h * h * frame.azimuth_step_rad / std::max(std::abs(ay * dx - ax * dy), 0.25 * h);
+    const double u = (projection_[k] - p_min) / sub;
+    const double half = 0.5 * footprint / sub;
+    if (!(half > 1e-9)) {
+      coverage_[std::min(static_cast<std::size_t>(u), sub_bins - 1)] += 1.0;
+      continue;
+    }
+    const double u0 = std::max(u - half, 0.0);
+    const double u1 = std::min(u + half, static_cast<double>(sub_bins));
+    const double density = 1.0 / (2.0 * half);
+    for (auto j = static_cast<std::size_t>(u0); j < sub_bins && static_cast<double>(j) < u1; ++j) {
+      const double overlap =
+          std::min(u1, static_cast<double>(j + 1)) - std::max(u0, static_cast<double>(j));
+      if (overlap > 0.0) coverage_[j] += overlap * density;
+    }
+  }
+  // Sliding windows of one bin (kSubBins sub-bins), one sub-bin apart; a valley window's peaks
+  // are the highest windows entirely left and entirely right of it.
+  const std::size_t windows = sub_bins - kSubBins + 1;
+  window_.resize(windows);
+  for (std::size_t j = 0; j < windows; ++j) {
+    double w = 0.0;
+    for (std::size_t q = 0; q < kSubBins; ++q) w += coverage_[j + q];
+    window_[j] = w;
+  }
+  left_max_.assign(windows, 0.0);
+  for (std::size_t j = kSubBins; j < windows; ++j) {
+    left_max_[j] = std::max(left_max_[j - 1], window_[j - kSubBins]);
+  }
+  // Deepest valley: the smallest window / (smaller peak); ties (within 1e-9) to the first.
+  // Scanning right to left with right_max over windows j + kSubBins.. .
+  std::size_t best = windows;
+  double best_score = 2.0;
+  double right_max = 0.0;
+  for (std::size_t j = windows - kSubBins; j-- > kSubBins;) {
+    right_max = std::max(right_max, window_[j + kSubBins]);
+    const double peak = std::min(left_max_[j], right_max);
+    const double w = window_[j];
+    if (!(w < peak) || w > config_.split_valley_ratio * peak) continue;
+    const double score = w / peak;
+    if (score <= best_score + 1e-9) {
+      best = j;
+      best_score = std::min(score, best_score);
+    }
+  }
+  if (best == windows) return false;
+  cut = p_min + (static_cast<double>(best) + 0.5 * kSubBins) * sub;
+  // Both parts must be clusters in their own right.
+  std::size_t left = 0;
+  for (std::size_t k = 0; k < m; ++k) left += projection_[k] < cut ? 1 : 0;
+  const auto min_points = static_cast<std::size_t>(config_.min_cluster_points);
+  return left >= min_points && m - left >= min_points;
+}
+
+void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,
+                             std::size_t end) {
+  const std::size_t n = end - begin;
   const bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
   if (small && (n < static_cast<std::size_t>(config_.relaxed_min_cluster_points) ||
                 frame.predictions->empty())) {
@@ -166,23 +351,17 @@ void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& fr
   }
 
   const float* range = scan.ranges().data();
-  const float* x = scan.xs().data();
-  const float* y = scan.ys().data();
-  const float* z = scan.zs().data();
   const auto columns = static_cast<std::uint32_t>(frame.columns);
   const auto top_ring_start = static_cast<std::uint32_t>(frame.rings - 1) * columns;
 
-  world_.resize(n);
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = -lo;
   double range_sum = 0.0;
   bool touches_top_or_bottom = false;
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = begin; k < end; ++k) {
     const std::uint32_t i = cluster_[k];
-    const Eigen::Vector3d w =
-        frame.rotation * Eigen::Vector3d(x[i], y[i], z[i]) + frame.translation;
-    world_[k] = w;
+    const Eigen::Vector3d& w = world_[k];
     sum += w;
     lo = lo.cwiseMin(w);
     hi = hi.cwiseMax(w);
@@ -237,7 +416,7 @@ void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& fr
 
   if (!small) ++stats_.clusters;
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (std::size_t k = 0; k < n; ++k) {
+  for (std::size_t k = begin; k < end; ++k) {
     const Eigen::Vector3d d = world_[k] - mean;
     cov.noalias() += d * d.transpose();
   }
@@ -250,7 +429,8 @@ void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& fr
   d.covariance = cov.cast<float>();
   d.box.min = lo.cast<float>();
   d.box.max = hi.cast<float>();
-  d.indices.assign(cluster_.begin(), cluster_.end());
+  d.indices.assign(cluster_.begin() + static_cast<std::ptrdiff_t>(begin),
+                   cluster_.begin() + static_cast<std::ptrdiff_t>(end));
   std::sort(d.indices.begin(), d.indices.end());
   d.relaxed = relaxed;
   stats_.relaxed += relaxed ? 1 : 0;
@@ -286,6 +466,7 @@ const std::vector<core::Detection>& Detector::detect(
   frame.rotation = sensor_pose.rotation.normalized().toRotationMatrix();
   frame.translation = sensor_pose.translation;
   frame.predictions = &predicted_positions_world;
+  frame.azimuth_step_rad = 2.0 * std::numbers::pi / static_cast<double>(scan.columns());
 
   state_dirty_ = true;
   collect_segment_points(scan, segment_labels);
@@ -297,6 +478,13 @@ const std::vector<core::Detection>& Detector::detect(
   }
   for (const std::uint32_t i : seeds_) state_[i] = kNone;
   state_dirty_ = false;
+  // Clusters come in order of their smallest cell; the parts of a split cluster may not.
+  if (stats_.splits > 0) {
+    std::sort(detections_.begin(), detections_.end(),
+              [](const core::Detection& a, const core::Detection& b) {
+                return a.indices.front() < b.indices.front();
+              });
+  }
   return detections_;
 }
 

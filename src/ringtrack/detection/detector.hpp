@@ -1,5 +1,6 @@
 #pragma once
-/// Detection (paper III.C, Alg. 1): region growing on the grid and the object model.
+/// Detection (paper III.C, Alg. 1): region growing on the grid, the split of clusters that hold
+/// several people side by side, and the object model.
 
 #include <Eigen/Core>
 #include <cstdint>
@@ -21,7 +22,9 @@ inline constexpr std::uint8_t kSegmentLabel = 1;
 /// too_high, too_tall, too_wide, too_short.
 struct DetectorStats {
   std::size_t segment_points{0};  ///< valid cells labelled kSegmentLabel
-  std::size_t clusters{0};        ///< clusters with at least min_cluster_points points
+  std::size_t clusters{0};        ///< clusters with at least min_cluster_points points (each
+                                  ///< part of a split cluster counts)
+  std::size_t splits{0};          ///< cuts made by the split step (each adds one cluster)
   std::size_t too_small{0};       ///< clusters dropped for having fewer points
   std::size_t too_high{0};        ///< lowest point above max_altitude_m
   std::size_t too_tall{0};        ///< vertical extent above max_height_m
@@ -32,6 +35,14 @@ struct DetectorStats {
   std::size_t detections{0};      ///< accepted clusters (strict and relaxed)
 };
 
+/// Most levels of the split step's recursion (at most 2^kMaxSplitDepth parts per cluster).
+inline constexpr int kMaxSplitDepth = 4;
+/// The split only examines clusters whose principal axis is at most 60 degrees from the
+/// tangential direction (|cos| >= this): people side by side spread across the line of sight.
+inline constexpr double kSplitMinAxisCos = 0.5;
+/// Sub-bins per split_bin_m bin: the split's sliding window moves by a quarter bin.
+inline constexpr std::size_t kSubBins = 4;
+
 /// Clusters the segment points of a scan by region growing on the rings x columns grid and keeps
 /// the clusters that fit the object model in the world frame.
 ///
@@ -40,14 +51,23 @@ struct DetectorStats {
 /// difference (or 3-D distance, per join_rule) is below join_distance_m. Because the columns
 /// wrap, an object cut by the seam is one cluster without a separate fusion step.
 ///
-/// Object model (world frame): vertical extent in [min_height_m, max_height_m], horizontal box
-/// diagonal <= max_diagonal_m, lowest point <= max_altitude_m. The minimum-height test is
-/// skipped for clusters with a point in the top or bottom ring and credits the extent with
-/// range * tan(min_height_ring_gap_deg) (sparse rings under-sample height). A cluster that fails
-/// this strict model but whose centroid lies within relaxed_radius_m (horizontally) of a
-/// predicted track position is tested without the minimum height and with
-/// relaxed_max_diagonal_m; it is flagged relaxed. Clusters with fewer than min_cluster_points
-/// but at least relaxed_min_cluster_points points can only be accepted this way.
+/// Split: a cluster whose extent along its principal horizontal axis exceeds split_min_width_m
+/// (axis within 60 degrees of the tangential direction) is cut at the deepest valley of its
+/// coverage profile along that axis (each point spread over its column footprint, so a
+/// uniformly sampled surface is flat), found with a split_bin_m window sliding by a quarter
+/// bin, when the valley holds at most split_valley_ratio times the smaller of the highest
+/// windows on either side and both parts have min_cluster_points (two people side by side,
+/// whom the range-difference join merges); the parts are split again while still too wide, up
+/// to kMaxSplitDepth levels.
+///
+/// Object model (world frame, each part of a split cluster on its own): vertical extent in
+/// [min_height_m, max_height_m], horizontal box diagonal <= max_diagonal_m, lowest point <=
+/// max_altitude_m. The minimum-height test is skipped for clusters with a point in the top or
+/// bottom ring and credits the extent with range * tan(min_height_ring_gap_deg) (sparse rings
+/// under-sample height). A cluster that fails this strict model but whose centroid lies within
+/// relaxed_radius_m (horizontally) of a predicted track position is tested without the minimum
+/// height and with relaxed_max_diagonal_m; it is flagged relaxed. Clusters with fewer than
+/// min_cluster_points but at least relaxed_min_cluster_points points can only be accepted this way.
 ///
 /// Cost: O(cells / 8) to find the segment points plus O(segment points * window cells); the
 /// buffers live in the detector, so steady-state calls do not allocate.
@@ -87,6 +107,10 @@ class Detector {
   template <core::JoinRule kRule>
   void grow_clusters(const core::OrganizedScan& scan, const Frame& frame);
   void evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame);
+  void split_cluster(const Frame& frame);
+  bool find_split(const Frame& frame, std::size_t begin, std::size_t end, double& cut);
+  void evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,
+                     std::size_t end);
   core::Detection& next_detection();
 
   core::DetectionConfig config_;
@@ -99,6 +123,16 @@ class Detector {
   std::vector<std::uint32_t> seeds_;    // segment cells in grid order
   std::vector<std::uint32_t> cluster_;  // cells of the cluster being grown, in visit order
   std::vector<Eigen::Vector3d> world_;  // world points of the cluster being evaluated
+  struct Range {
+    std::size_t begin, end;
+    int depth;
+  };
+  std::vector<Range> split_stack_;  // parts of the cluster still to be examined
+  std::vector<Range> parts_;        // final parts of the cluster (ranges of cluster_, world_)
+  std::vector<double> projection_;  // per point of the part: position on its principal axis
+  std::vector<double> coverage_;    // split: coverage profile along the axis, per sub-bin
+  std::vector<double> window_;      // split: coverage per sliding window of one bin
+  std::vector<double> left_max_;    // split: per window, the highest window entirely left of it
   std::vector<core::Detection> detections_;
   std::vector<core::Detection> spare_;  // detections from earlier calls, kept for their buffers
   DetectorStats stats_;

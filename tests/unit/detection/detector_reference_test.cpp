@@ -90,7 +90,7 @@ TEST(DetectorReference, ClustersEqualUnionFindOnRandomGrids) {
   const std::vector<std::pair<int, int>> sizes = {{1, 8},  {2, 3},   {4, 5},   {3, 7},
                                                   {16, 9}, {16, 60}, {8, 120}, {16, 360}};
   int trials = 0, nontrivial = 0;
-  std::size_t strict = 0, relaxed = 0, rejected = 0;
+  std::size_t strict = 0, relaxed = 0, rejected = 0, splits = 0;
   for (const auto& [rings, columns] : sizes) {
     for (int radius : {0, 1, 2, 3, 5}) {
       for (const auto rule : {JoinRule::kRangeDifference, JoinRule::kEuclidean}) {
@@ -116,6 +116,7 @@ TEST(DetectorReference, ClustersEqualUnionFindOnRandomGrids) {
           expect_same(got, testing::naive_detect(scan, labels, all, pose), what + " accept-all");
           nontrivial +=
               fast.stats().clusters > 1 && fast.stats().clusters < fast.stats().segment_points;
+          splits += fast.stats().splits;
 
           // The default object model with predictions at some segment points.
           DetectionConfig model;
@@ -133,6 +134,7 @@ TEST(DetectorReference, ClustersEqualUnionFindOnRandomGrids) {
           strict += fast_model.stats().detections - fast_model.stats().relaxed;
           relaxed += fast_model.stats().relaxed;
           rejected += fast_model.stats().clusters - fast_model.stats().detections;
+          splits += fast_model.stats().splits;
           ++trials;
         }
       }
@@ -143,6 +145,7 @@ TEST(DetectorReference, ClustersEqualUnionFindOnRandomGrids) {
   EXPECT_GT(strict, 100u);
   EXPECT_GT(relaxed, 100u);
   EXPECT_GT(rejected, 100u);
+  EXPECT_GT(splits, 100u);  // the split step (default settings) is compared too
 }
 
 TEST(DetectorReference, ReusedDetectorEqualsFreshOne) {

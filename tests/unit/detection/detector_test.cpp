@@ -127,8 +127,10 @@ TEST(Detector, TwoPeopleOneBehindTheOtherStayApart) {
     EXPECT_EQ(d[1].indices, back);
     expect_matches_reference(g, config);
 
-    // Control: without the distance test the two merge into one (too wide) cluster.
+    // Control: without the distance test the two merge into one (too wide) cluster (the split
+    // step, which would cut it at the range step, is off here).
     config.join_distance_m = 100.0;
+    config.split_min_width_m = 0.0;
     Detector merged(config);
     EXPECT_TRUE(g.detect(merged).empty());
     EXPECT_EQ(merged.stats().clusters, 1u);
