@@ -85,6 +85,7 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
     const auto t3 = Clock::now();
     if (options.on_scan) options.on_scan(scan, result);
     for (const tracking::Hypothesis& h : result.hypotheses) {
+      if (!h.reported) continue;
       tracks.push_back(
           {k, static_cast<std::int64_t>(h.id), h.position(), h.dynamic, h.ever_dynamic});
     }

@@ -309,6 +309,7 @@ void run(const RunOptions& o) {
     const auto& result = pipeline->process(scan, pose);
     rows.clear();
     for (const auto& h : result.hypotheses) {
+      if (!h.reported) continue;  // unconfirmed or lost (docs/tracking.md, "What is reported")
       rows.push_back(track_row(index, scan.stamp_ns, h));
       track_ids.insert(h.id);
       if (h.ever_dynamic) dynamic_ids.insert(h.id);

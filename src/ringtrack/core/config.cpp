@@ -279,6 +279,12 @@ class Schema {
            "free_space: used while the sensor is within this distance of where it saw the "
            "anchor (m); beyond, beams pass beside the remembered points and the box test "
            "decides (a moving sensor)");
+    integer("confirm_hits", t.confirm_hits, 1, 1000000,
+            "a hypothesis is reported (tracks.csv, evaluation) once it had this many detections: "
+            "one-scan blips never appear, new objects appear this many scans minus one late");
+    integer("report_missed_scans", t.report_missed_scans, 0, 1000000,
+            "a hypothesis missed in more consecutive scans than this is kept (for its id) but not "
+            "reported, unless the scan shows it hidden behind something (occluded)");
     integer("occluded_coast_scans", t.occluded_coast_scans, 0, 1000000,
             "a hypothesis whose predicted points are occluded (something in front) is kept this "
             "many missed scans even when its covariance would delete it");

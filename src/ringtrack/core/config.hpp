@@ -101,6 +101,8 @@ struct TrackingConfig {
   double free_space_max_viewpoint_shift_m{0.1};  // farther from the anchor's viewpoint: box test
   int occluded_coast_scans{30};  // a hypothesis whose predicted points are occluded coasts this
                                  // many missed scans before the covariance test may delete it
+  int confirm_hits{2};           // detections before a hypothesis is reported (M of M)
+  int report_missed_scans{5};    // a hypothesis missed longer is not reported (unless occluded)
   int free_delete_scans{2};  // missed in this many consecutive scans seeing through its predicted
                              // points: deleted
 };

@@ -237,6 +237,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
   for (auto& h : hypotheses_) {
     report_velocity(h);
     classify(h);
+    decide_report(h);
   }
   visibility_ = nullptr;  // the scan may not outlive this call
   return hypotheses_;
@@ -394,6 +395,15 @@ void Tracker::delete_merged() {
     }
   }
   hypotheses_.resize(k);
+}
+
+void Tracker::decide_report(Hypothesis& h) const {
+  // Confirmation (M detections) keeps one-scan blips out of the output, at the cost of
+  // confirm_hits - 1 scans of latency for a new object. A hypothesis that has gone unmeasured
+  // for long is kept (its id survives a short gap) but not listed: its prediction drifts off the
+  // object, unless the scan shows the object is hidden where it is predicted.
+  h.confirmed = h.confirmed || h.hits >= config_.confirm_hits;
+  h.reported = h.confirmed && (h.missed_scans <= config_.report_missed_scans || h.occluded);
 }
 
 void Tracker::report_velocity(Hypothesis& h) const {

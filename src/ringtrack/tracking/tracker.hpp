@@ -44,6 +44,8 @@ struct Hypothesis {
   int moved_scans{0};        ///< consecutive measured scans away from the anchor
   int box_moved_scans{0};    ///< consecutive measured scans the box test held in
   int hits{0};               ///< scans with an assigned detection, the creating one included
+  bool confirmed{false};     ///< had confirm_hits detections: no longer a possible one-scan blip
+  bool reported{false};      ///< confirmed and recently measured (or hidden): what outputs list
   std::vector<Eigen::Vector3f> anchor_points;  ///< sample of the anchor detection's world points
   std::vector<Eigen::Vector3f> last_points;    ///< sample of the last detection's world points
   Eigen::Vector3d anchor_viewpoint{Eigen::Vector3d::Zero()};  ///< sensor position when anchored
@@ -125,6 +127,7 @@ class Tracker {
   void remember_points(Hypothesis& h, const core::Detection& d) const;
   void look_for_missed(Hypothesis& h) const;
   void report_velocity(Hypothesis& h) const;
+  void decide_report(Hypothesis& h) const;
 
   core::TrackingConfig config_;
   double min_speed_mps_;
