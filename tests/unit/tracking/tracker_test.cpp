@@ -481,3 +481,47 @@ TEST(Tracker, EveryCostTracksTheCrossing) {
 
 }  // namespace
 }  // namespace ringtrack::tracking
+
+namespace ringtrack::tracking {
+namespace {
+
+// What is reported: confirmed (confirm_hits detections) and measured within report_missed_scans
+// (or occluded); the hypothesis itself lives on and keeps its id through a longer gap.
+TEST(TrackerReport, BlipsNeverReportedLostTracksHiddenButKept) {
+  const core::TrackingConfig config;  // confirm_hits 2, report_missed_scans 5
+  ASSERT_EQ(config.confirm_hits, 2);
+  ASSERT_EQ(config.report_missed_scans, 5);
+  Tracker tracker(config);
+  std::int64_t t = 0;
+  const auto step = [&](std::vector<core::Detection> d) {
+    t += 100000000;
+    return tracker.update(d, t);
+  };
+  // A one-scan blip far away: present, never reported.
+  auto hs = step({testing::person_detection({9.0f, 9.0f, 0.0f}, {})});
+  ASSERT_EQ(hs.size(), 1u);
+  EXPECT_FALSE(hs[0].reported);
+  EXPECT_FALSE(hs[0].confirmed);
+  // A person: reported from its second detection on.
+  const auto person = testing::person_detection({2.0f, 0.0f, 0.0f}, {});
+  hs = step({person});
+  const auto person_id = hs.back().id;
+  EXPECT_FALSE(hs.back().reported);
+  hs = step({person});
+  for (const auto& h : hs) EXPECT_EQ(h.reported, h.id == person_id) << h.id;
+  // Missed: reported for report_missed_scans scans, then kept but not reported.
+  for (int missed = 1; missed <= 8; ++missed) {
+    hs = step({});
+    const auto it = std::find_if(hs.begin(), hs.end(), [&](auto& h) { return h.id == person_id; });
+    ASSERT_NE(it, hs.end()) << "missed " << missed;
+    EXPECT_EQ(it->reported, missed <= 5) << "missed " << missed;
+  }
+  // Back: same id, reported again at once.
+  hs = step({person});
+  const auto it = std::find_if(hs.begin(), hs.end(), [&](auto& h) { return h.id == person_id; });
+  ASSERT_NE(it, hs.end());
+  EXPECT_TRUE(it->reported);
+}
+
+}  // namespace
+}  // namespace ringtrack::tracking
