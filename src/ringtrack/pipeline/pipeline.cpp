@@ -34,6 +34,11 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
                            std::to_string(tracker_.stamp_ns()) +
                            " ns; scans must come in time order");
   }
+  if (scan.rings() != model_.rings()) {
+    throw core::InputError("pipeline: the scan at " + std::to_string(scan.stamp_ns) + " ns has " +
+                           std::to_string(scan.rings()) + " rings, the sensor model " +
+                           model_.name + " has " + std::to_string(model_.rings()));
+  }
   const auto t0 = Clock::now();
   segmenter_.segment(scan, labels_);
   const auto t1 = Clock::now();
