@@ -23,36 +23,23 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // few edge beams, few enough that probing costs microseconds.
 constexpr std::size_t kRememberedPoints = 16;
 
-// What one scan says about a set of remembered points.
-struct PointVotes {
-  int free{0};      // the beam ends beyond the point (or returns nothing: sky)
-  int occupied{0};  // the beam ends at the point
-  int occluded{0};  // the beam ends before the point
-  [[nodiscard]] int decided() const { return free + occupied; }
-};
-
-PointVotes probe_points(const core::VisibilityQuery& query, const core::TrackingConfig& config,
-                        const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3d& shift) {
-  PointVotes votes;
+// What one scan says about a set of remembered points (moved by shift): the verdict of each
+// point whose deciding beam passes within free_space_lateral_m of it.
+core::VisibilityCounts probe_points(const core::VisibilityQuery& query,
+                                    const core::TrackingConfig& config,
+                                    const std::vector<Eigen::Vector3f>& points,
+                                    const Eigen::Vector3d& shift) {
+  core::VisibilityCounts counts;
   for (const auto& p : points) {
     const auto probe = query.probe(p.cast<double>() + shift, config.free_space_margin_m);
-    if (probe.lateral_m > config.free_space_lateral_m) continue;
-    switch (probe.visibility) {
-      case core::Visibility::kFree:
-      case core::Visibility::kNoReturn:
-        ++votes.free;
-        break;
-      case core::Visibility::kOccupied:
-        ++votes.occupied;
-        break;
-      case core::Visibility::kOccluded:
-        ++votes.occluded;
-        break;
-      case core::Visibility::kUnknown:
-        break;
-    }
+    if (probe.lateral_m <= config.free_space_lateral_m) counts.add(probe.visibility);
   }
-  return votes;
+  return counts;
+}
+
+// A beam without a return passed the point and met nothing (sky): as good as seen free.
+int seen_free(const core::VisibilityCounts& c) {
+  return c.free + c.no_return;
 }
 
 double max_eigenvalue(const Eigen::Matrix3d& m) {
@@ -321,13 +308,14 @@ void Tracker::look_for_missed(Hypothesis& h) const {
   }
   // Where the object's points would be now if it moved as predicted.
   const Eigen::Vector3d shift = h.position() - h.last_detection.centroid.cast<double>();
-  const PointVotes votes = probe_points(*visibility_, config_, h.last_points, shift);
-  const int seen = votes.free + votes.occupied + votes.occluded;
+  const auto counts = probe_points(*visibility_, config_, h.last_points, shift);
+  const int free = seen_free(counts);
+  const int seen = free + counts.occupied + counts.occluded;
   // Something in front of most of its points: it is hidden, not gone.
-  h.occluded = seen > 0 && 2 * votes.occluded > seen;
+  h.occluded = seen > 0 && 2 * counts.occluded > seen;
   // The scan looks through nearly all of them and nothing there was detected: it is gone (or
   // the prediction is wrong, which a fresh hypothesis repairs).
-  const bool seen_through = votes.free >= 2 && votes.free >= seen - 1;
+  const bool seen_through = free >= 2 && free >= seen - 1;
   h.seen_through_scans = seen_through ? h.seen_through_scans + 1 : 0;
 }
 
@@ -453,10 +441,10 @@ void Tracker::classify_by_free_space(Hypothesis& h) const {
   // makes them free, so static clutter stays static however its cluster changes shape.
   const double moved =
       (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
-  const PointVotes votes =
-      probe_points(*visibility_, config_, h.anchor_points, Eigen::Vector3d::Zero());
-  const bool left = moved > config_.free_space_min_distance_m && votes.free >= 2 &&
-                    votes.free >= config_.free_space_min_share * votes.decided();
+  const auto counts = probe_points(*visibility_, config_, h.anchor_points, Eigen::Vector3d::Zero());
+  const int free = seen_free(counts);
+  const bool left = moved > config_.free_space_min_distance_m && free >= 2 &&
+                    free >= config_.free_space_min_share * (free + counts.occupied);
   h.moved_scans = left ? h.moved_scans + 1 : 0;
   if (h.moved_scans >= config_.free_space_confirm_scans) {
     h.dynamic = h.ever_dynamic = true;
