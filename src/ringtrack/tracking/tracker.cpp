@@ -463,11 +463,11 @@ void Tracker::classify_by_box(Hypothesis& h) const {
   const double moved =
       (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
   if (!footprints_intersect(h.box, h.anchor_box) && moved > config_.dynamic_min_distance_m) {
-    ++h.box_moved_scans;
+    ++h.moved_scans;
   } else {
-    h.box_moved_scans = 0;
+    h.moved_scans = 0;
   }
-  if (h.box_moved_scans >= config_.dynamic_confirm_scans) {
+  if (h.moved_scans >= config_.dynamic_confirm_scans) {
     h.dynamic = h.ever_dynamic = true;
     h.rest_scans = 0;
     h.moved_scans = 0;

@@ -41,8 +41,7 @@ struct Hypothesis {
   int age_scans{0};          ///< scans since creation, 1 in the creating scan
   int missed_scans{0};       ///< consecutive scans without an assigned detection
   int rest_scans{0};         ///< consecutive scans with reported speed zero
-  int moved_scans{0};        ///< consecutive measured scans away from the anchor
-  int box_moved_scans{0};    ///< consecutive measured scans the box test held in
+  int moved_scans{0};        ///< consecutive measured scans the dynamic test held in
   int hits{0};               ///< scans with an assigned detection, the creating one included
   bool confirmed{false};     ///< had confirm_hits detections: no longer a possible one-scan blip
   bool reported{false};      ///< confirmed and recently measured (or hidden): what outputs list

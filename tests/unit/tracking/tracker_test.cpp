@@ -329,6 +329,17 @@ TEST(Tracker, DynamicPersonComingToRestIsStaticAgainButStaysEverDynamic) {
   EXPECT_FALSE(h.dynamic);
   EXPECT_TRUE(h.ever_dynamic);
   EXPECT_TRUE(run.single_identity(0));
+  // Walking off again needs the full confirmation again: the count from the first walk is gone.
+  // At 1 m/s the centre is more than 1 m from the rest position from walk scan 11 on, so the
+  // fifth consecutive moved scan is 15 at the earliest.
+  for (int k = 1; k <= 20; ++k) {
+    run.step({{0, person_detection(at(3.9 + 1.0 * k * kDt, 0), {})}});
+    if (k <= 14) {
+      EXPECT_FALSE(run.tracker.hypotheses().front().dynamic) << "walk scan " << k;
+    }
+  }
+  EXPECT_TRUE(run.tracker.hypotheses().front().dynamic);
+  EXPECT_TRUE(run.single_identity(0));
 }
 
 TEST(Tracker, RelaxedDetectionsNeverStartTracksButConfirmThem) {
