@@ -170,7 +170,8 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
                                           const std::vector<std::uint8_t>& labels,
                                           const core::DetectionConfig& config,
                                           const core::Pose& pose,
-                                          const std::vector<Eigen::Vector3f>& predictions) {
+                                          const std::vector<Eigen::Vector3f>& predictions,
+                                          const core::BackgroundRangeModel* background) {
   std::vector<std::size_t> points;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     if (labels[i] == 1 && scan.valid(i)) points.push_back(i);
@@ -204,9 +205,20 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
 
   std::vector<core::Detection> out;
   for (auto& [cells, world] : parts) {
-    // Below min_cluster_points a cluster can only be relaxed, from relaxed_min_cluster_points.
+    // Below min_cluster_points a cluster is sparse when every point lies in front of the
+    // background (then the strict model judges it), else it can only be relaxed, from
+    // relaxed_min_cluster_points points.
     const bool small = cells.size() < static_cast<std::size_t>(config.min_cluster_points);
-    if (small && cells.size() < static_cast<std::size_t>(config.relaxed_min_cluster_points)) {
+    bool sparse = small && background != nullptr &&
+                  cells.size() >= static_cast<std::size_t>(config.sparse_min_points);
+    for (const auto i : cells) {
+      if (!sparse) break;
+      const float bg = background->background_range(background->cell_of(scan, i));
+      sparse =
+          std::isinf(bg) || scan.range_m(i) < static_cast<double>(bg) - config.background_margin_m;
+    }
+    if (small && !sparse &&
+        cells.size() < static_cast<std::size_t>(config.relaxed_min_cluster_points)) {
       continue;
     }
     bool edge_ring = false;
@@ -234,8 +246,8 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
         std::sqrt((max_x - min_x) * (max_x - min_x) + (max_y - min_y) * (max_y - min_y));
     const double gap =
         range_sum / n * std::tan(config.min_height_ring_gap_deg * std::numbers::pi / 180.0);
-    const bool strict = !small && min_z <= config.max_altitude_m && height <= config.max_height_m &&
-                        diagonal <= config.max_diagonal_m &&
+    const bool strict = (!small || sparse) && min_z <= config.max_altitude_m &&
+                        height <= config.max_height_m && diagonal <= config.max_diagonal_m &&
                         (edge_ring || height + gap >= config.min_height_m);
     bool near = false;
     for (const auto& p : predictions) {
@@ -261,6 +273,7 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
     std::sort(cells.begin(), cells.end());
     d.indices = cells;
     d.relaxed = !strict;
+    d.sparse = sparse && strict;
     out.push_back(std::move(d));
   }
   std::sort(out.begin(), out.end(), [](const core::Detection& a, const core::Detection& b) {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "ringtrack/core/background_range.hpp"
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
@@ -20,12 +21,15 @@ namespace ringtrack::testing {
 /// its principal horizontal axis while wider than split_min_width_m (up to
 /// detection::kMaxSplitDepth levels); the object model then filters the parts
 /// (clusters below min_cluster_points only as relaxed detections, from
-/// relaxed_min_cluster_points points).
+/// relaxed_min_cluster_points points, or as sparse detections under the strict model when every
+/// point lies background_margin_m in front of the background's learned range or the background
+/// is open there).
 /// Ordered by smallest grid index, indices ascending. O(segment points^2).
 std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
                                           const std::vector<std::uint8_t>& labels,
                                           const core::DetectionConfig& config,
                                           const core::Pose& pose,
-                                          const std::vector<Eigen::Vector3f>& predictions = {});
+                                          const std::vector<Eigen::Vector3f>& predictions = {},
+                                          const core::BackgroundRangeModel* background = nullptr);
 
 }  // namespace ringtrack::testing

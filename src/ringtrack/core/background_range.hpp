@@ -4,29 +4,11 @@
 #include <cstdint>
 #include <vector>
 
+#include "ringtrack/core/config.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/sensor_model.hpp"
 
 namespace ringtrack::core {
-
-/// Parameters of BackgroundRangeModel (see docs/visibility.md).
-struct BackgroundRangeConfig {
-  /// Two ranges are one surface when within tolerance_m + relative_tolerance * (nearer range).
-  double tolerance_m{0.15};
-  /// Range-proportional part of the tolerance (far returns and grazing surfaces are noisier).
-  double relative_tolerance{0.01};
-  /// Consecutive scans a range nearer than the background (or the first range) must hold to
-  /// become background: a person passing stays foreground, a parked car is learned.
-  int scans_to_learn{20};
-  /// Consecutive scans a range behind the background must hold to replace it; seeing through the
-  /// old background proves it gone, so this may be shorter.
-  int scans_to_learn_behind{5};
-  /// Weight of a return matching the background in its running average (0 freezes it).
-  double smoothing{0.05};
-  /// Whether a cell without returns (sky, kTooFar) for scans_to_learn scans learns an open
-  /// (infinite) background, in front of which any return counts.
-  bool learn_no_return{true};
-};
 
 /// Learns, per cell of a static sensor, the range of the static background. Cells are the
 /// model's grid: ring * bins + bin, bin = the column azimuth rounded to the model's azimuth step,
@@ -34,7 +16,8 @@ struct BackgroundRangeConfig {
 /// scans made with OrganizedScan::set_uniform_columns have cell == scan index.
 class BackgroundRangeModel {
  public:
-  /// An empty model for the sensor; throws ConfigError naming the parameter when out of range.
+  /// An empty model for the sensor (BackgroundRangeConfig: config.hpp, the `background`
+  /// section); throws ConfigError naming the parameter when out of range.
   explicit BackgroundRangeModel(const SensorModel& model, const BackgroundRangeConfig& config = {});
 
   /// Adds one scan (taken from the same static pose). Throws InputError on a ring-count mismatch.

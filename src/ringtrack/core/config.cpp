@@ -99,6 +99,19 @@ class Schema {
           v = static_cast<int>(x);
         });
   }
+  void boolean(const char* name, bool& v, const std::string& doc) {
+    add(
+        name, doc + " {true | false}", [&v] { return std::string(v ? "true" : "false"); },
+        [&v](const std::string& text, const std::string& where) {
+          if (text == "true") {
+            v = true;
+          } else if (text == "false") {
+            v = false;
+          } else {
+            throw ConfigError(where + ": '" + text + "' is not one of true | false");
+          }
+        });
+  }
   template <class E>
   void choice(const char* name, E& v, std::vector<std::pair<std::string, E>> names,
               const std::string& doc) {
@@ -169,6 +182,15 @@ class Schema {
             "a cluster smaller than min_cluster_points but with at least this many points is "
             "kept as a relaxed detection when it lies near a predicted track (it confirms, never "
             "starts, a track); >= min_cluster_points disables this");
+    integer("sparse_min_points", d.sparse_min_points, 1, 1000000,
+            "a cluster smaller than min_cluster_points but with at least this many points is "
+            "kept as a sparse detection, which may start a track, when every point lies at least "
+            "background_margin_m in front of the background a static sensor has learned (section "
+            "background: far people hit by one or two beams); >= min_cluster_points disables "
+            "this");
+    number("background_margin_m", d.background_margin_m, 0.0, 1000.0,
+           "a point lies in front of the learned background when its range is at least this "
+           "much shorter (m)");
     number("min_height_m", d.min_height_m, 0.0, 100.0,
            "object model: smallest vertical extent (m); not applied to clusters touching the top "
            "or bottom ring");
@@ -302,6 +324,31 @@ class Schema {
     number("box_margin_m", m.box_margin_m, 0.0, 10.0,
            "hypothesis boxes grow by this on every side before the points inside them are "
            "removed (m)");
+
+    auto& b = c.background;
+    section_ = "background";
+    number("tolerance_m", b.tolerance_m, 0.0, 1000.0,
+           "two ranges of a cell are one surface when within this plus relative_tolerance times "
+           "the nearer range (m)");
+    number("relative_tolerance", b.relative_tolerance, 0.0, 0.99,
+           "range-proportional part of the tolerance (far and grazing returns are noisier)");
+    integer("scans_to_learn", b.scans_to_learn, 1, 60000,
+            "consecutive scans a range nearer than the background (or a cell's first range) must "
+            "hold to become the background: passers-by stay in front, a parked car is learned");
+    integer("scans_to_learn_behind", b.scans_to_learn_behind, 1, 60000,
+            "consecutive scans a range behind the background must hold to replace it (seeing "
+            "through the old background proves it gone)");
+    number("smoothing", b.smoothing, 0.0, 1.0,
+           "weight of a return matching the background in its running average (0 freezes it)");
+    boolean("learn_no_return", b.learn_no_return,
+            "a cell without returns for scans_to_learn scans learns an open background, in front "
+            "of which every return counts");
+    number("static_shift_m", b.static_shift_m, 0.0, 1000.0,
+           "the background is learned while the sensor stays within this distance of the pose "
+           "where it came to rest (m); a sensor moving farther forgets it and starts again when "
+           "it rests");
+    number("static_turn_deg", b.static_turn_deg, 0.0, 180.0,
+           "... and within this rotation of that pose (degrees)");
   }
 
   std::string section_;

@@ -35,6 +35,9 @@ struct DetectionConfig {
   int min_cluster_points{3};          // smaller clusters are dropped ...
   int relaxed_min_cluster_points{2};  // ... unless this big and near a prediction (relaxed):
                                       // far people are hit by one or two beams
+  int sparse_min_points{1};           // ... or this big with every point in front of the
+                                      // learned background (sparse: may start a track)
+  double background_margin_m{0.5};    // in front of the background: nearer by at least this
   double min_height_m{0.8};           // object model: vertical extent range
   double max_height_m{2.3};
   double min_height_ring_gap_deg{2.0};  // min-height test credits range*tan(this): sparse rings
@@ -114,12 +117,37 @@ struct MappingConfig {
   double box_margin_m{0.1};  // boxes grow by this before points inside them are removed
 };
 
+/// Background range model of a static sensor (core::BackgroundRangeModel, docs/visibility.md):
+/// per cell, the range of the static background learned over scans.
+struct BackgroundRangeConfig {
+  /// Two ranges are one surface when within tolerance_m + relative_tolerance * (nearer range).
+  double tolerance_m{0.15};
+  /// Range-proportional part of the tolerance (far returns and grazing surfaces are noisier).
+  double relative_tolerance{0.01};
+  /// Consecutive scans a range nearer than the background (or the first range) must hold to
+  /// become background: a person passing stays foreground, a parked car is learned.
+  int scans_to_learn{20};
+  /// Consecutive scans a range behind the background must hold to replace it; seeing through the
+  /// old background proves it gone, so this may be shorter.
+  int scans_to_learn_behind{5};
+  /// Weight of a return matching the background in its running average (0 freezes it).
+  double smoothing{0.05};
+  /// Whether a cell without returns (sky, kTooFar) for scans_to_learn scans learns an open
+  /// (infinite) background, in front of which any return counts.
+  bool learn_no_return{true};
+  /// The pipeline learns the model while the sensor stays within this distance (m) ...
+  double static_shift_m{0.02};
+  /// ... and this rotation (degrees) of the pose where it came to rest; beyond, it forgets it.
+  double static_turn_deg{0.1};
+};
+
 /// Every setting of the pipeline.
 struct Config {
   SegmentationConfig segmentation;
   DetectionConfig detection;
   TrackingConfig tracking;
   MappingConfig mapping;
+  BackgroundRangeConfig background;
 };
 
 /// Documentation of one key, as dump-config prints it.

@@ -16,6 +16,8 @@ struct Detection {
   Box3 box;                                                 ///< axis-aligned, world frame
   std::vector<std::uint32_t> indices;  ///< grid cells (ring * columns + column)
   bool relaxed{false};  ///< accepted only by the relaxed model near a predicted track
+  bool sparse{false};   ///< fewer points than a detection needs, accepted for lying in front of
+                        ///< the learned background (docs/detection.md)
 };
 
 }  // namespace ringtrack::core

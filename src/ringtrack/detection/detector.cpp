@@ -25,6 +25,7 @@ struct Detector::Frame {
   Eigen::Matrix3d rotation{Eigen::Matrix3d::Identity()};
   Eigen::Vector3d translation{Eigen::Vector3d::Zero()};
   const std::vector<Eigen::Vector3f>* predictions{nullptr};
+  const core::BackgroundRangeModel* background{nullptr};  // learned background, or none
   double azimuth_step_rad{0.0};  // column spacing, for the split's bin width
 };
 
@@ -166,12 +167,9 @@ core::Detection& Detector::next_detection() {
 
 void Detector::evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame) {
   const std::size_t n = cluster_.size();
-  // A cluster below min_cluster_points may still confirm a track (a far person hit by one or
-  // two beams) when it has relaxed_min_cluster_points and lies near a prediction. Parts of a
-  // split are smaller still, so such a cluster is not examined further.
-  const bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
-  if (small && (n < static_cast<std::size_t>(config_.relaxed_min_cluster_points) ||
-                frame.predictions->empty())) {
+  // Parts of a split are smaller still, so a cluster that cannot be a small detection is not
+  // examined further.
+  if (n < static_cast<std::size_t>(config_.min_cluster_points) && !may_be_small(n, frame)) {
     ++stats_.too_small;
     return;
   }
@@ -340,15 +338,42 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
   return left >= min_points && m - left >= min_points;
 }
 
+bool Detector::may_be_small(std::size_t n, const Frame& frame) const {
+  // Near a prediction it may confirm a track (a far person hit by one or two beams); in front
+  // of the learned background it may start one.
+  const bool relaxed = n >= static_cast<std::size_t>(config_.relaxed_min_cluster_points) &&
+                       !frame.predictions->empty();
+  const bool sparse =
+      frame.background != nullptr && n >= static_cast<std::size_t>(config_.sparse_min_points);
+  return relaxed || sparse;
+}
+
+bool Detector::in_front_of_background(const core::OrganizedScan& scan, const Frame& frame,
+                                      std::size_t begin, std::size_t end) const {
+  if (frame.background == nullptr ||
+      end - begin < static_cast<std::size_t>(config_.sparse_min_points)) {
+    return false;
+  }
+  for (std::size_t k = begin; k < end; ++k) {
+    if (!frame.background->is_in_front(scan, cluster_[k], config_.background_margin_m)) {
+      return false;
+    }
+  }
+  return true;
+}
+
 void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,
                              std::size_t end) {
   const std::size_t n = end - begin;
-  const bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
-  if (small && (n < static_cast<std::size_t>(config_.relaxed_min_cluster_points) ||
-                frame.predictions->empty())) {
+  bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
+  if (small && !may_be_small(n, frame)) {
     ++stats_.too_small;
     return;
   }
+  // A small cluster in front of the learned background is the strict model's to judge: the
+  // background says something new is there, the model whether it has a person's shape.
+  const bool sparse = small && in_front_of_background(scan, frame, begin, end);
+  if (sparse) small = false;
 
   const float* range = scan.ranges().data();
   const auto columns = static_cast<std::uint32_t>(frame.columns);
@@ -433,13 +458,16 @@ void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame
                    cluster_.begin() + static_cast<std::ptrdiff_t>(end));
   std::sort(d.indices.begin(), d.indices.end());
   d.relaxed = relaxed;
+  d.sparse = sparse && !relaxed;
   stats_.relaxed += relaxed ? 1 : 0;
+  stats_.sparse += d.sparse ? 1 : 0;
   ++stats_.detections;
 }
 
 const std::vector<core::Detection>& Detector::detect(
     const core::OrganizedScan& scan, const std::vector<std::uint8_t>& segment_labels,
-    const core::Pose& sensor_pose, const std::vector<Eigen::Vector3f>& predicted_positions_world) {
+    const core::Pose& sensor_pose, const std::vector<Eigen::Vector3f>& predicted_positions_world,
+    const core::BackgroundRangeModel* background) {
   const std::size_t n = scan.size();
   if (segment_labels.size() != n) {
     throw core::InputError("detection: expected one segment label per cell (" + std::to_string(n) +
@@ -466,6 +494,7 @@ const std::vector<core::Detection>& Detector::detect(
   frame.rotation = sensor_pose.rotation.normalized().toRotationMatrix();
   frame.translation = sensor_pose.translation;
   frame.predictions = &predicted_positions_world;
+  frame.background = background;
   frame.azimuth_step_rad = 2.0 * std::numbers::pi / static_cast<double>(scan.columns());
 
   state_dirty_ = true;

@@ -1,6 +1,7 @@
 #include "ringtrack/pipeline/pipeline.hpp"
 
 #include <chrono>
+#include <numbers>
 #include <utility>
 
 #include "ringtrack/core/error.hpp"
@@ -22,7 +23,8 @@ Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
       segmenter_(config.segmentation),
       detector_(config.detection),
       tracker_(config.tracking),
-      filter_(config.mapping) {
+      filter_(config.mapping),
+      background_(model_, config.background) {
   core::validate_config(config);
   model_.validate();
 }
@@ -42,9 +44,14 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   const auto t0 = Clock::now();
   segmenter_.segment(scan, labels_);
   const auto t1 = Clock::now();
-  // The tracker's predictions for this scan let the detector relax its model near known objects.
+  // The tracker's predictions for this scan let the detector relax its model near known objects;
+  // the background learned from the earlier scans of a resting sensor lets it keep clusters too
+  // small for the object model when they stand where the scene was seen free.
   const auto predictions = tracker_.predicted_positions(scan.stamp_ns);
-  const auto& detections = detector_.detect(scan, labels_, pose, predictions);
+  const bool resting = track_rest(pose);
+  const auto* background = resting && background_.scans() > 0 ? &background_ : nullptr;
+  const auto& detections = detector_.detect(scan, labels_, pose, predictions, background);
+  if (resting) background_.update(scan);
   const auto t2 = Clock::now();
   // What this scan sees of the space hypotheses occupied (free-space tests; docs/visibility.md).
   const core::VisibilityQuery visibility(scan, model_, pose);
@@ -62,6 +69,22 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   result_.times = {elapsed_ms(t0, t1), elapsed_ms(t1, t2), elapsed_ms(t2, t3), elapsed_ms(t3, t4),
                    elapsed_ms(t0, t4)};
   return result_;
+}
+
+bool Pipeline::track_rest(const core::Pose& pose) {
+  const auto& limits = config_.background;
+  if (rest_pose_) {
+    const double shift = (pose.translation - rest_pose_->translation).norm();
+    const double turn_deg =
+        pose.rotation.normalized().angularDistance(rest_pose_->rotation.normalized()) * 180.0 /
+        std::numbers::pi;
+    if (shift <= limits.static_shift_m && turn_deg <= limits.static_turn_deg) return true;
+  }
+  // A new resting pose candidate: what was learned belongs to another viewpoint. The model is
+  // reset once when the sensor leaves, not on every scan of a moving sensor.
+  if (background_.scans() > 0) background_.reset();
+  rest_pose_ = pose;
+  return false;
 }
 
 void Pipeline::finish() {

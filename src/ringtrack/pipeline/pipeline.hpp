@@ -2,9 +2,11 @@
 /// The whole per-scan pipeline: segmentation, detection, tracking, dynamic-object filter.
 
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
+#include "ringtrack/core/background_range.hpp"
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
@@ -55,14 +57,21 @@ class Pipeline {
   [[nodiscard]] const core::Config& config() const { return config_; }
   [[nodiscard]] const tracking::Tracker& tracker() const { return tracker_; }
   [[nodiscard]] const core::SensorModel& sensor_model() const { return model_; }
+  /// The background range model learned while the sensor rests (empty while it moves).
+  [[nodiscard]] const core::BackgroundRangeModel& background() const { return background_; }
 
  private:
+  /// Forgets the background when the sensor left its resting pose; true while it rests there.
+  bool track_rest(const core::Pose& pose);
+
   core::Config config_;
   core::SensorModel model_;
   segmentation::Segmenter segmenter_;
   detection::Detector detector_;
   tracking::Tracker tracker_;
   mapping::DynamicObjectFilter filter_;
+  core::BackgroundRangeModel background_;
+  std::optional<core::Pose> rest_pose_;  // where the sensor came to rest (background's pose)
   std::vector<std::uint8_t> labels_;
   FrameResult result_;
 };

@@ -443,7 +443,10 @@ void Tracker::classify_by_free_space(Hypothesis& h) const {
       (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
   const auto counts = probe_points(*visibility_, config_, h.anchor_points, Eigen::Vector3d::Zero());
   const int free = seen_free(counts);
-  const bool left = moved > config_.free_space_min_distance_m && free >= 2 &&
+  // Two points seen free outvote a stray beam; an anchor of one point (a far person's sparse
+  // detection) has only the one.
+  const int min_free = std::min<int>(2, static_cast<int>(h.anchor_points.size()));
+  const bool left = moved > config_.free_space_min_distance_m && free >= min_free &&
                     free >= config_.free_space_min_share * (free + counts.occupied);
   h.moved_scans = left ? h.moved_scans + 1 : 0;
   if (h.moved_scans >= config_.free_space_confirm_scans) {
