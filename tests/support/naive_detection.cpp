@@ -171,7 +171,7 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
                                           const core::DetectionConfig& config,
                                           const core::Pose& pose,
                                           const std::vector<Eigen::Vector3f>& predictions,
-                                          const core::BackgroundRangeModel* background) {
+                                          const core::SceneMemory* memory) {
   std::vector<std::size_t> points;
   for (std::size_t i = 0; i < scan.size(); ++i) {
     if (labels[i] == 1 && scan.valid(i)) points.push_back(i);
@@ -205,17 +205,14 @@ std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
 
   std::vector<core::Detection> out;
   for (auto& [cells, world] : parts) {
-    // Below min_cluster_points a cluster is sparse when every point lies in front of the
-    // background (then the strict model judges it), else it can only be relaxed, from
+    // Below min_cluster_points a cluster is sparse when every point stands where the memory saw
+    // free space (then the strict model judges it), else it can only be relaxed, from
     // relaxed_min_cluster_points points.
     const bool small = cells.size() < static_cast<std::size_t>(config.min_cluster_points);
-    bool sparse = small && background != nullptr &&
+    bool sparse = small && memory != nullptr &&
                   cells.size() >= static_cast<std::size_t>(config.sparse_min_points);
-    for (const auto i : cells) {
-      if (!sparse) break;
-      const float bg = background->background_range(background->cell_of(scan, i));
-      sparse =
-          std::isinf(bg) || scan.range_m(i) < static_cast<double>(bg) - config.background_margin_m;
+    for (std::size_t k = 0; k < cells.size() && sparse; ++k) {
+      sparse = memory->seen_free_before(scan, cells[k], world[k], config.background_margin_m);
     }
     if (small && !sparse &&
         cells.size() < static_cast<std::size_t>(config.relaxed_min_cluster_points)) {

@@ -6,11 +6,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "ringtrack/core/background_range.hpp"
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
+#include "ringtrack/core/scene_memory.hpp"
 #include "ringtrack/detection/detector.hpp"
 
 namespace ringtrack::testing {
@@ -21,15 +21,14 @@ namespace ringtrack::testing {
 /// its principal horizontal axis while wider than split_min_width_m (up to
 /// detection::kMaxSplitDepth levels); the object model then filters the parts
 /// (clusters below min_cluster_points only as relaxed detections, from
-/// relaxed_min_cluster_points points, or as sparse detections under the strict model when every
-/// point lies background_margin_m in front of the background's learned range or the background
-/// is open there).
+/// relaxed_min_cluster_points points, or as sparse detections under the strict model when the
+/// memory says every point stands where earlier scans saw free space).
 /// Ordered by smallest grid index, indices ascending. O(segment points^2).
 std::vector<core::Detection> naive_detect(const core::OrganizedScan& scan,
                                           const std::vector<std::uint8_t>& labels,
                                           const core::DetectionConfig& config,
                                           const core::Pose& pose,
                                           const std::vector<Eigen::Vector3f>& predictions = {},
-                                          const core::BackgroundRangeModel* background = nullptr);
+                                          const core::SceneMemory* memory = nullptr);
 
 }  // namespace ringtrack::testing

@@ -6,6 +6,7 @@
 
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/core/scene_memory.hpp"
 #include "ringtrack/core/sensor_model.hpp"
 
 namespace ringtrack::core {
@@ -14,7 +15,7 @@ namespace ringtrack::core {
 /// model's grid: ring * bins + bin, bin = the column azimuth rounded to the model's azimuth step,
 /// so scans with a varying column count or start azimuth (real captures) update the same cells;
 /// scans made with OrganizedScan::set_uniform_columns have cell == scan index.
-class BackgroundRangeModel {
+class BackgroundRangeModel : public SceneMemory {
  public:
   /// An empty model for the sensor (BackgroundRangeConfig: config.hpp, the `background`
   /// section); throws ConfigError naming the parameter when out of range.
@@ -32,6 +33,15 @@ class BackgroundRangeModel {
   /// is_in_front for a scan cell's own return (false for invalid cells).
   [[nodiscard]] bool is_in_front(const OrganizedScan& scan, std::size_t scan_index,
                                  double margin_m) const;
+
+  /// SceneMemory: is_in_front for the cell's own return (the world point is not needed: the
+  /// model is kept in the resting sensor's frame).
+  [[nodiscard]] bool seen_free_before(const OrganizedScan& scan, std::size_t cell,
+                                      const Eigen::Vector3d& world_point,
+                                      double margin_m) const override {
+    static_cast<void>(world_point);
+    return is_in_front(scan, cell, margin_m);
+  }
 
   /// Number of rings.
   [[nodiscard]] int rings() const { return rings_; }

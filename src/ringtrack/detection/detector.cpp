@@ -25,8 +25,8 @@ struct Detector::Frame {
   Eigen::Matrix3d rotation{Eigen::Matrix3d::Identity()};
   Eigen::Vector3d translation{Eigen::Vector3d::Zero()};
   const std::vector<Eigen::Vector3f>* predictions{nullptr};
-  const core::BackgroundRangeModel* background{nullptr};  // learned background, or none
-  double azimuth_step_rad{0.0};  // column spacing, for the split's bin width
+  const core::SceneMemory* memory{nullptr};  // what earlier scans saw, or none
+  double azimuth_step_rad{0.0};              // column spacing, for the split's bin width
 };
 
 Detector::Detector(const core::DetectionConfig& config) : config_(config) {
@@ -339,23 +339,24 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
 }
 
 bool Detector::may_be_small(std::size_t n, const Frame& frame) const {
-  // Near a prediction it may confirm a track (a far person hit by one or two beams); in front
-  // of the learned background it may start one.
+  // Near a prediction it may confirm a track (a far person hit by one or two beams); where
+  // earlier scans saw free space it may start one.
   const bool relaxed = n >= static_cast<std::size_t>(config_.relaxed_min_cluster_points) &&
                        !frame.predictions->empty();
   const bool sparse =
-      frame.background != nullptr && n >= static_cast<std::size_t>(config_.sparse_min_points);
+      frame.memory != nullptr && n >= static_cast<std::size_t>(config_.sparse_min_points);
   return relaxed || sparse;
 }
 
-bool Detector::in_front_of_background(const core::OrganizedScan& scan, const Frame& frame,
-                                      std::size_t begin, std::size_t end) const {
-  if (frame.background == nullptr ||
+bool Detector::new_to_the_scene(const core::OrganizedScan& scan, const Frame& frame,
+                                std::size_t begin, std::size_t end) const {
+  if (frame.memory == nullptr ||
       end - begin < static_cast<std::size_t>(config_.sparse_min_points)) {
     return false;
   }
   for (std::size_t k = begin; k < end; ++k) {
-    if (!frame.background->is_in_front(scan, cluster_[k], config_.background_margin_m)) {
+    if (!frame.memory->seen_free_before(scan, cluster_[k], world_[k],
+                                        config_.background_margin_m)) {
       return false;
     }
   }
@@ -370,10 +371,16 @@ void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame
     ++stats_.too_small;
     return;
   }
-  // A small cluster in front of the learned background is the strict model's to judge: the
-  // background says something new is there, the model whether it has a person's shape.
-  const bool sparse = small && in_front_of_background(scan, frame, begin, end);
-  if (sparse) small = false;
+  // A small cluster where earlier scans saw free space is the strict model's to judge: the
+  // scene memory says something new is there, the model whether it has a person's shape.
+  const bool sparse = small && new_to_the_scene(scan, frame, begin, end);
+  if (sparse) {
+    small = false;
+  } else if (small && (n < static_cast<std::size_t>(config_.relaxed_min_cluster_points) ||
+                       frame.predictions->empty())) {
+    ++stats_.too_small;  // neither new to the scene nor able to confirm a track
+    return;
+  }
 
   const float* range = scan.ranges().data();
   const auto columns = static_cast<std::uint32_t>(frame.columns);
@@ -467,7 +474,7 @@ void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame
 const std::vector<core::Detection>& Detector::detect(
     const core::OrganizedScan& scan, const std::vector<std::uint8_t>& segment_labels,
     const core::Pose& sensor_pose, const std::vector<Eigen::Vector3f>& predicted_positions_world,
-    const core::BackgroundRangeModel* background) {
+    const core::SceneMemory* memory) {
   const std::size_t n = scan.size();
   if (segment_labels.size() != n) {
     throw core::InputError("detection: expected one segment label per cell (" + std::to_string(n) +
@@ -494,7 +501,7 @@ const std::vector<core::Detection>& Detector::detect(
   frame.rotation = sensor_pose.rotation.normalized().toRotationMatrix();
   frame.translation = sensor_pose.translation;
   frame.predictions = &predicted_positions_world;
-  frame.background = background;
+  frame.memory = memory;
   frame.azimuth_step_rad = 2.0 * std::numbers::pi / static_cast<double>(scan.columns());
 
   state_dirty_ = true;

@@ -6,11 +6,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "ringtrack/core/background_range.hpp"
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
+#include "ringtrack/core/scene_memory.hpp"
 
 namespace ringtrack::detection {
 
@@ -34,7 +34,7 @@ struct DetectorStats {
   std::size_t relaxed{0};         ///< accepted by the relaxed model only (also clusters of
                                   ///< relaxed_min_cluster_points..min_cluster_points-1 points)
   std::size_t sparse{0};          ///< accepted as sparse (fewer than min_cluster_points, in
-                                  ///< front of the learned background, strict model)
+                                  ///< space earlier scans saw free, strict model)
   std::size_t detections{0};      ///< accepted clusters (strict, sparse and relaxed)
 };
 
@@ -72,11 +72,12 @@ inline constexpr std::size_t kSubBins = 4;
 /// height and with relaxed_max_diagonal_m; it is flagged relaxed. Clusters with fewer than
 /// min_cluster_points but at least relaxed_min_cluster_points points can be accepted this way.
 ///
-/// Sparse detections: given the background range model a static sensor has learned, a cluster
-/// with fewer than min_cluster_points but at least sparse_min_points points, every one of them
-/// at least background_margin_m in front of its cell's background, is tested with the strict
-/// model and flagged sparse (a far person hit by one or two beams where the scene was seen
-/// free before). Unlike a relaxed detection it may start a track.
+/// Sparse detections: given a scene memory (core::SceneMemory: the background range model of a
+/// resting sensor, or the last scans of a moving one), a cluster with fewer than
+/// min_cluster_points but at least sparse_min_points points, every one of them at least
+/// background_margin_m in front of what earlier scans saw through its space, is tested with the
+/// strict model and flagged sparse (a far person hit by one or two beams where the scene was
+/// seen free before). Unlike a relaxed detection it may start a track.
 ///
 /// Cost: O(cells / 8) to find the segment points plus O(segment points * window cells); the
 /// buffers live in the detector, so steady-state calls do not allocate.
@@ -88,15 +89,15 @@ class Detector {
   /// Detects objects in a scan. segment_labels holds one label per cell (kSegmentLabel marks a
   /// segment point; invalid cells are ignored whatever their label); sensor_pose maps the
   /// sensor frame to the world; predicted_positions_world are the tracker's predictions that
-  /// enable the relaxed model; background (optional) is the model learned from earlier scans
-  /// of the same static pose, which enables sparse detections. Detections come in order of their
+  /// enable the relaxed model; memory (optional) says where earlier scans saw free space, which
+  /// enables sparse detections. Detections come in order of their
   /// smallest grid index, each with its grid indices ascending. The returned reference stays valid
   /// until the next call. Throws core::InputError when the labels do not match the scan's size.
   const std::vector<core::Detection>& detect(
       const core::OrganizedScan& scan, const std::vector<std::uint8_t>& segment_labels,
       const core::Pose& sensor_pose,
       const std::vector<Eigen::Vector3f>& predicted_positions_world = {},
-      const core::BackgroundRangeModel* background = nullptr);
+      const core::SceneMemory* memory = nullptr);
 
   /// The detections of the last call.
   [[nodiscard]] const std::vector<core::Detection>& detections() const { return detections_; }
@@ -119,8 +120,8 @@ class Detector {
   void grow_clusters(const core::OrganizedScan& scan, const Frame& frame);
   void evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame);
   [[nodiscard]] bool may_be_small(std::size_t n, const Frame& frame) const;
-  [[nodiscard]] bool in_front_of_background(const core::OrganizedScan& scan, const Frame& frame,
-                                            std::size_t begin, std::size_t end) const;
+  [[nodiscard]] bool new_to_the_scene(const core::OrganizedScan& scan, const Frame& frame,
+                                      std::size_t begin, std::size_t end) const;
   void split_cluster(const Frame& frame);
   bool find_split(const Frame& frame, std::size_t begin, std::size_t end, double& cut);
   void evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,

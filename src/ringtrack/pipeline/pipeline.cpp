@@ -49,8 +49,10 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   // small for the object model when they stand where the scene was seen free.
   const auto predictions = tracker_.predicted_positions(scan.stamp_ns);
   const bool resting = track_rest(pose);
-  const auto* background = resting && background_.scans() > 0 ? &background_ : nullptr;
-  const auto& detections = detector_.detect(scan, labels_, pose, predictions, background);
+  // A moving sensor has no such memory yet: what earlier scans saw from other viewpoints says
+  // little about single far points (docs/BENCHMARK.md, issue 10).
+  const core::SceneMemory* memory = resting && background_.scans() > 0 ? &background_ : nullptr;
+  const auto& detections = detector_.detect(scan, labels_, pose, predictions, memory);
   if (resting) background_.update(scan);
   const auto t2 = Clock::now();
   // What this scan sees of the space hypotheses occupied (free-space tests; docs/visibility.md).

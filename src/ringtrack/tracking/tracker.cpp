@@ -279,6 +279,7 @@ void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
   h.last_detection = {d.centroid, d.covariance, d.box, d.indices.size(), d.relaxed, stamp_ns_};
   ++h.hits;
   h.occluded = false;
+  h.unseen = false;
   h.seen_through_scans = 0;
   remember_points(h, d);
 }
@@ -302,6 +303,7 @@ void Tracker::remember_points(Hypothesis& h, const core::Detection& d) const {
 
 void Tracker::look_for_missed(Hypothesis& h) const {
   h.occluded = false;
+  h.unseen = false;
   if (visibility_ == nullptr || h.last_points.empty()) {
     h.seen_through_scans = 0;
     return;
@@ -317,6 +319,10 @@ void Tracker::look_for_missed(Hypothesis& h) const {
   // the prediction is wrong, which a fresh hypothesis repairs).
   const bool seen_through = free >= 2 && free >= seen - 1;
   h.seen_through_scans = seen_through ? h.seen_through_scans + 1 : 0;
+  // Not seen where predicted: the scan's beams passed there and went on. A far object of one
+  // or two points often falls between beams for a scan; it is kept (it is not deleted for one
+  // stray beam) but not reported in a scan that could not see it.
+  h.unseen = free >= 1 && free == seen;
 }
 
 void Tracker::create(const core::Detection& d, int index) {
@@ -391,7 +397,8 @@ void Tracker::decide_report(Hypothesis& h) const {
   // for long is kept (its id survives a short gap) but not listed: its prediction drifts off the
   // object, unless the scan shows the object is hidden where it is predicted.
   h.confirmed = h.confirmed || h.hits >= config_.confirm_hits;
-  h.reported = h.confirmed && (h.missed_scans <= config_.report_missed_scans || h.occluded);
+  h.reported = h.confirmed && (h.missed_scans == 0 || h.occluded ||
+                                (h.missed_scans <= config_.report_missed_scans && !h.unseen));
 }
 
 void Tracker::report_velocity(Hypothesis& h) const {

@@ -78,6 +78,7 @@ void expect_same(const std::vector<core::Detection>& fast, const std::vector<cor
   for (std::size_t k = 0; k < fast.size(); ++k) {
     ASSERT_EQ(fast[k].indices, slow[k].indices) << what << " detection " << k;
     EXPECT_EQ(fast[k].relaxed, slow[k].relaxed) << what << " detection " << k;
+    EXPECT_EQ(fast[k].sparse, slow[k].sparse) << what << " detection " << k;
     EXPECT_TRUE(fast[k].centroid.isApprox(slow[k].centroid, 1e-5f)) << what;
     EXPECT_TRUE(fast[k].box.min.isApprox(slow[k].box.min, 1e-5f)) << what;
     EXPECT_TRUE(fast[k].box.max.isApprox(slow[k].box.max, 1e-5f)) << what;
@@ -146,6 +147,58 @@ TEST(DetectorReference, ClustersEqualUnionFindOnRandomGrids) {
   EXPECT_GT(relaxed, 100u);
   EXPECT_GT(rejected, 100u);
   EXPECT_GT(splits, 100u);  // the split step (default settings) is compared too
+}
+
+// A hand-made scene memory: a cell counts as seen free before unless its index is a multiple
+// of 5 or its world point lies below z = -1 m (so both arguments matter).
+class EveryFifthOccupied : public core::SceneMemory {
+ public:
+  [[nodiscard]] bool seen_free_before(const core::OrganizedScan& scan, std::size_t cell,
+                                      const Eigen::Vector3d& world_point,
+                                      double margin_m) const override {
+    static_cast<void>(scan);
+    EXPECT_DOUBLE_EQ(margin_m, 0.7);
+    return cell % 5 != 0 && world_point.z() > -1.0;
+  }
+};
+
+TEST(DetectorReference, SparseDetectionsEqualTheReferenceWithASceneMemory) {
+  std::mt19937 rng(11);
+  const EveryFifthOccupied memory;
+  std::size_t sparse = 0, relaxed = 0, strict = 0;
+  for (int k = 0; k < 60; ++k) {
+    const int columns = k % 3 == 0 ? 360 : 120;
+    auto [scan, labels] = random_scan(rng, 16, columns, 0.03 + 0.01 * (k % 5));
+    DetectionConfig config;
+    config.neighbor_radius = 1 + k % 3;
+    config.min_cluster_points = 3 + k % 2;
+    config.sparse_min_points = 1 + k % 2;
+    config.background_margin_m = 0.7;
+    config.min_height_m = 0.2;
+    config.max_diagonal_m = 0.8;
+    const auto pose = random_pose(rng);
+    std::vector<Eigen::Vector3f> predictions;
+    for (std::size_t i = 0; i < scan.size(); i += 97) {
+      if (scan.valid(i)) predictions.push_back(pose.to_world(scan.point(i)));
+    }
+    Detector fast(config);
+    const auto& got = fast.detect(scan, labels, pose, predictions, &memory);
+    expect_same(got, testing::naive_detect(scan, labels, config, pose, predictions, &memory),
+                "scan " + std::to_string(k));
+    sparse += fast.stats().sparse;
+    relaxed += fast.stats().relaxed;
+    strict += fast.stats().detections - fast.stats().sparse - fast.stats().relaxed;
+    for (const auto& d : got) {
+      // Only clusters below min_cluster_points are sparse, never relaxed at the same time.
+      if (d.sparse) {
+        EXPECT_LT(d.indices.size(), static_cast<std::size_t>(config.min_cluster_points));
+        EXPECT_FALSE(d.relaxed);
+      }
+    }
+  }
+  EXPECT_GT(sparse, 50u);
+  EXPECT_GT(relaxed, 20u);
+  EXPECT_GT(strict, 10u);
 }
 
 TEST(DetectorReference, ReusedDetectorEqualsFreshOne) {

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "ringtrack/core/background_range.hpp"
 #include "ringtrack/core/error.hpp"
 #include "support/naive_detection.hpp"
 
@@ -299,6 +300,64 @@ TEST(Detector, RelaxedDetectionOnlyNearAPrediction) {
   ASSERT_EQ(strict.size(), 1u);
   EXPECT_FALSE(strict[0].relaxed);
   EXPECT_EQ(detector.stats().relaxed, 0u);
+}
+
+TEST(Detector, SparseClustersOnlyInFrontOfALearnedBackground) {
+  // A resting sensor looked at a wall 80 m away for three scans; now two far people stand in
+  // front of it, hit by one and by two beams, and one wall cell is labelled a segment point.
+  Grid g;
+  for (int r = 0; r < g.scan.rings(); ++r) {
+    for (int c = 0; c < g.scan.columns(); ++c) {
+      g.scan.set_range(g.model, r, c, 80.0f, 1.0f);
+    }
+  }
+  core::BackgroundRangeConfig learn_fast;
+  learn_fast.scans_to_learn = 3;
+  core::BackgroundRangeModel background(g.model, learn_fast);
+  for (int k = 0; k < 3; ++k) background.update(g.scan);
+  ASSERT_EQ(background.learned_count(), g.scan.size());
+
+  const auto one = g.paint(8, 8, 100, 1, 50.0);   // 1 point, 0.87 m above the sensor
+  const auto two = g.paint(7, 7, 200, 2, 50.0);   // 2 points side by side
+  const auto wall = g.paint(8, 8, 300, 1, 80.0);  // on the background: old structure
+  Detector detector{DetectionConfig{}};
+  EXPECT_TRUE(g.detect(detector).empty()) << "without memory a cluster needs 3 points";
+  EXPECT_EQ(detector.stats().too_small, 3u);
+
+  const auto& d = detector.detect(g.scan, g.labels, {}, {}, &background);
+  ASSERT_EQ(d.size(), 2u);
+  EXPECT_EQ(d[0].indices, two);  // in order of the smallest cell: ring 7 before ring 8
+  EXPECT_EQ(d[1].indices, one);
+  for (const auto& x : d) {
+    EXPECT_TRUE(x.sparse);
+    EXPECT_FALSE(x.relaxed);
+  }
+  EXPECT_EQ(detector.stats().sparse, 2u);
+  EXPECT_EQ(detector.stats().too_small, 1u) << "the wall cell";
+  static_cast<void>(wall);
+
+  // Nearer than the margin in front of the background is not evidence.
+  DetectionConfig wide_margin;
+  wide_margin.background_margin_m = 31.0;
+  Detector strict_margin(wide_margin);
+  EXPECT_TRUE(strict_margin.detect(g.scan, g.labels, {}, {}, &background).empty());
+  // Two points are needed when sparse_min_points says so.
+  DetectionConfig two_points;
+  two_points.sparse_min_points = 2;
+  Detector pairs(two_points);
+  const auto& p = pairs.detect(g.scan, g.labels, {}, {}, &background);
+  ASSERT_EQ(p.size(), 1u);
+  EXPECT_EQ(p[0].indices, two);
+  // A sparse cluster still meets the object model: the same point 10 m away is too short
+  // (10 m * tan 2 deg of ring-gap credit is below the 0.8 m minimum height).
+  Grid near;
+  for (int c = 0; c < near.scan.columns(); ++c) near.scan.set_range(near.model, 8, c, 80.0f, 1.0f);
+  core::BackgroundRangeModel near_background(near.model, learn_fast);
+  for (int k = 0; k < 3; ++k) near_background.update(near.scan);
+  near.paint(8, 8, 100, 1, 10.0);
+  Detector model_check{DetectionConfig{}};
+  EXPECT_TRUE(model_check.detect(near.scan, near.labels, {}, {}, &near_background).empty());
+  EXPECT_EQ(model_check.stats().too_short, 1u);
 }
 
 TEST(Detector, ObjectModelAndOutputAreInTheWorldFrame) {

@@ -466,6 +466,53 @@ TEST(TrackerFreeSpace, PersonSeenThroughIsDeletedAfterFreeDeleteScans) {
   }
 }
 
+// A missed hypothesis whose predicted points the scan sees through is kept (its id survives a
+// scan between beams) but not reported in that scan; without the query it is reported for
+// report_missed_scans scans, and a hidden one stays reported.
+TEST(TrackerFreeSpace, SeenThroughHypothesisIsKeptButNotReported) {
+  core::TrackingConfig config;
+  config.free_delete_scans = 0;  // never deleted as seen through
+  TrackerRun with(config, true);
+  TrackerRun without(config, false);
+  TrackerRun hidden(config, true);
+  for (int k = 0; k < 20; ++k) {
+    const auto r =
+        render(sensor_pose(0, 0), {wall_at(12.0), person_at(6.0, 1.0)}, scan_stamp_ns(k));
+    const auto d = detection_of(r, cells_of(r, {kPerson}));
+    with.step(r, {d});
+    without.step(r, {d});
+    hidden.step(r, {d});
+  }
+  ASSERT_TRUE(with.tracker.hypotheses().front().reported);
+  const auto empty = render(sensor_pose(0, 0), {wall_at(12.0)}, 0);
+  // A pillar between the sensor and the person hides it.
+  const auto blocked = render(
+      sensor_pose(0, 0),
+      {wall_at(12.0), person_at(6.0, 1.0), {make_box(3.0, 3.4, 0.0, 1.0, 0.0, 3.0), kPillar}}, 0);
+  for (int missed = 1; missed <= config.report_missed_scans + 1; ++missed) {
+    with.step(empty, {});
+    without.step(empty, {});
+    hidden.step(blocked, {});
+    ASSERT_EQ(with.tracker.hypotheses().size(), 1u);
+    const auto& h = with.tracker.hypotheses().front();
+    EXPECT_TRUE(h.unseen) << "missed " << missed;
+    EXPECT_FALSE(h.reported) << "missed " << missed;
+    EXPECT_EQ(without.tracker.hypotheses().front().reported, missed <= config.report_missed_scans)
+        << "missed " << missed;
+    EXPECT_FALSE(hidden.tracker.hypotheses().front().unseen) << "missed " << missed;
+    EXPECT_TRUE(hidden.tracker.hypotheses().front().occluded) << "missed " << missed;
+    EXPECT_TRUE(hidden.tracker.hypotheses().front().reported) << "missed " << missed;
+  }
+  // Measured again: reported again, with the same id.
+  const auto back = render(sensor_pose(0, 0), {wall_at(12.0), person_at(6.0, 1.0)}, 0);
+  const auto id = with.tracker.hypotheses().front().id;
+  with.step(back, {detection_of(back, cells_of(back, {kPerson}))});
+  ASSERT_EQ(with.tracker.hypotheses().size(), 1u);
+  EXPECT_EQ(with.tracker.hypotheses().front().id, id);
+  EXPECT_TRUE(with.tracker.hypotheses().front().reported);
+  EXPECT_FALSE(with.tracker.hypotheses().front().unseen);
+}
+
 // Without a visibility query a missed hypothesis coasts exactly as before: deleted by the
 // covariance test after missed_scans_until_deletion scans, never as seen through, never held
 // as occluded.

@@ -1,0 +1,130 @@
+// Far people hit by one or two beams: with a resting sensor the pipeline learns the background
+// and keeps their clusters (sparse detections), so they are tracked; a moving sensor forgets it.
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include "ringtrack/pipeline/pipeline.hpp"
+#include "ringtrack/sim/scenario.hpp"
+#include "ringtrack/sim/simulator.hpp"
+
+namespace ringtrack::pipeline {
+namespace {
+
+// An empty field and one slim person (0.45 m wide) walking across the view 60 m away: one ring
+// (at hip height) hits them, in one column (measured: every scan with hits has one).
+sim::Scenario far_walker() {
+  sim::Scenario s;
+  s.name = "far-walker";
+  s.duration_s = 14.0;
+  s.area_m = {150.0, 150.0};
+  s.world_radius_m = 120.0;
+  s.sensor.position_m = {0.0, 0.0, 1.8};  // the -1 deg ring meets the walker at hip height
+  sim::ScriptedActor walker;
+  walker.id = 1;
+  walker.width_m = 0.45;
+  walker.waypoints = {{2.0, {60.0, -8.0, 0.0}}, {14.0, {60.0, 8.0, 0.0}}};
+  s.scripted.push_back(walker);
+  return s;
+}
+
+struct Outcome {
+  int scans_with_hits = 0;  // after the first 4 s (learning, confirmation)
+  int few_hit_scans = 0;    // ... of which the walker had at most two hit points
+  int tracked = 0;          // a reported dynamic hypothesis within 0.5 m of the truth
+  std::size_t sparse = 0;   // sparse detections over the run
+};
+
+Outcome run(const sim::Scenario& scenario, const core::Config& config) {
+  sim::Simulator simulator(scenario, 3);
+  Pipeline pipeline(config, simulator.model());
+  Outcome out;
+  sim::SimulatedScan scan;
+  for (std::int64_t k = 0; k < simulator.scan_count(); ++k) {
+    simulator.next(scan);
+    const auto& result = pipeline.process(scan.scan, scan.pose);
+    for (const auto& d : result.detections) out.sparse += d.sparse ? 1 : 0;
+    if (k < 40) continue;
+    for (const auto& o : scan.objects) {
+      if (o.hit_points == 0) continue;
+      ++out.scans_with_hits;
+      out.few_hit_scans += o.hit_points <= 2 ? 1 : 0;
+      for (const auto& h : result.hypotheses) {
+        if (h.reported && h.ever_dynamic &&
+            (h.position().cast<float>() - o.centroid_m).norm() < 0.5f) {
+          ++out.tracked;
+          break;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+TEST(PipelineSparse, FarPersonHitByOneBeamIsTrackedOnceTheBackgroundIsLearned) {
+  const auto with = run(far_walker(), core::Config{});
+  core::Config without_config;
+  without_config.detection.sparse_min_points = without_config.detection.min_cluster_points;
+  const auto without = run(far_walker(), without_config);
+
+  ASSERT_GT(with.scans_with_hits, 60);
+  EXPECT_EQ(with.few_hit_scans, with.scans_with_hits) << "the walker must be sparse";
+  EXPECT_GT(with.sparse, 50u);
+  EXPECT_GT(with.tracked * 10, with.scans_with_hits * 7)
+      << with.tracked << " of " << with.scans_with_hits;
+  EXPECT_EQ(without.sparse, 0u);
+  EXPECT_LT(without.tracked * 10, without.scans_with_hits * 2)
+      << without.tracked << " of " << without.scans_with_hits;
+}
+
+TEST(PipelineSparse, AMovingSensorLearnsNoBackground) {
+  auto scenario = sim::with_moving_sensor(far_walker());
+  sim::Simulator simulator(scenario, 3);
+  Pipeline pipeline(core::Config{}, simulator.model());
+  sim::SimulatedScan scan;
+  std::size_t sparse = 0;
+  for (std::int64_t k = 0; k < 60; ++k) {
+    simulator.next(scan);
+    const auto& result = pipeline.process(scan.scan, scan.pose);
+    for (const auto& d : result.detections) sparse += d.sparse ? 1 : 0;
+    EXPECT_EQ(pipeline.background().scans(), 0) << "scan " << k;
+  }
+  EXPECT_EQ(sparse, 0u);
+}
+
+TEST(PipelineSparse, TheBackgroundStartsAgainWhereTheSensorComesToRest) {
+  // Rest 2 s, move 1 m, rest again: the model learned at the first pose is forgotten.
+  sim::Scenario s = far_walker();
+  s.duration_s = 5.0;
+  sim::Simulator simulator(s, 3);
+  Pipeline pipeline(core::Config{}, simulator.model());
+  sim::SimulatedScan scan;
+  for (std::int64_t k = 0; k < 50; ++k) {
+    simulator.next(scan);
+    core::Pose pose = scan.pose;
+    if (k >= 20) pose.translation.x() += 1.0;
+    pipeline.process(scan.scan, pose);
+    if (k == 19) {
+      EXPECT_EQ(pipeline.background().scans(), 19);
+    } else if (k == 20) {
+      EXPECT_EQ(pipeline.background().scans(), 0);
+    } else if (k == 49) {
+      EXPECT_EQ(pipeline.background().scans(), 29);
+    }
+  }
+  // Within the tolerance (2 cm, 0.1 deg) the sensor still rests.
+  core::Config config;
+  Pipeline jitter(config, simulator.model());
+  sim::Simulator again(s, 3);
+  for (std::int64_t k = 0; k < 10; ++k) {
+    again.next(scan);
+    core::Pose pose = scan.pose;
+    pose.translation.y() += k % 2 == 1 ? 0.015 : 0.0;
+    jitter.process(scan.scan, pose);
+  }
+  EXPECT_EQ(jitter.background().scans(), 9);
+}
+
+}  // namespace
+}  // namespace ringtrack::pipeline
