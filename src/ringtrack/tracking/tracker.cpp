@@ -319,10 +319,11 @@ void Tracker::look_for_missed(Hypothesis& h) const {
   // the prediction is wrong, which a fresh hypothesis repairs).
   const bool seen_through = free >= 2 && free >= seen - 1;
   h.seen_through_scans = seen_through ? h.seen_through_scans + 1 : 0;
-  // Not seen where predicted: the scan's beams passed there and went on. A far object of one
-  // or two points often falls between beams for a scan; it is kept (it is not deleted for one
-  // stray beam) but not reported in a scan that could not see it.
-  h.unseen = free >= 1 && free == seen;
+  // Nothing in the scan where it is predicted: no beam ended at its points (seen through,
+  // passing beside them, or none there at all: a far object between two beams, an object below
+  // a tilted sensor's lowest ring) and nothing hides them. It is kept (one stray beam does not
+  // delete it) but not reported in a scan that shows nothing of it.
+  h.unseen = counts.occupied == 0 && !h.occluded;
 }
 
 void Tracker::create(const core::Detection& d, int index) {

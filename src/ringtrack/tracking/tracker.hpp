@@ -50,7 +50,7 @@ struct Hypothesis {
   Eigen::Vector3d anchor_viewpoint{Eigen::Vector3d::Zero()};  ///< sensor position when anchored
   bool occluded{false};       ///< missed, and the scan saw something in front of its prediction
   int seen_through_scans{0};  ///< consecutive missed scans that saw through its predicted points
-  bool unseen{false};  ///< missed, and every beam that decided its predicted points saw free
+  bool unseen{false};  ///< missed, and no beam ended at its predicted points, none hid them
   std::size_t points{0};      ///< points of the assigned detection this scan, 0 when missed
   int detection{-1};          ///< index of the detection assigned this scan, -1 when none
   DetectionSummary last_detection;  ///< the most recent assigned detection
