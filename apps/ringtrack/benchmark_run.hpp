@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -27,6 +28,9 @@ struct BenchmarkCaseOptions {
   std::uint64_t seed{1};
   bool deskew{true};                     ///< motion-compensate moving-sensor scans (exact poses)
   eval::TrackingEvalOptions evaluation;  ///< paper mode, 0.5 m, class person
+  /// Also evaluate the same tracks in person mode (person-flagged hypotheses, standing people
+  /// included) into BenchmarkCase::person.
+  bool person_figures{false};
   /// Called after every scan with the simulated scan (deskewed) and the pipeline's result,
   /// e.g. to write tracks.csv and objects.csv; may be empty.
   std::function<void(const sim::SimulatedScan&, const pipeline::FrameResult&)> on_scan;
@@ -40,6 +44,7 @@ struct BenchmarkCase {
   bool validation{false};  ///< a validation scenario (config/validation/), reported apart
   std::int64_t scans{0};
   eval::TrackingEvalResult tracking;
+  std::optional<eval::TrackingEvalResult> person;  ///< person mode, with person_figures
   eval::MapCounts map;
   StageSeries times;
   double simulate_s{0};  ///< wall time in the simulator

@@ -31,7 +31,8 @@ struct EvalOptions {
   std::string format = "ringtrack";
   double threshold_m = 0.5;
   double min_iou = 0.5;
-  bool all_hypotheses = false;
+  bool all_hypotheses = false;         // --all-hypotheses: the same as --hypotheses all
+  std::string hypotheses = "dynamic";  // dynamic (paper mode), person or all
   std::string target_class = "person";
   std::int64_t min_points = 1;
   bool ignore_stamps = false;
@@ -121,7 +122,14 @@ fs::path resolve_gt(const std::string& arg, bool motchallenge, std::string& name
 eval::TrackingEvalResult evaluate_ringtrack(const fs::path& gt_path, const fs::path& tracks_path,
                                             const EvalOptions& o) {
   const std::vector<io::ObjectRow> objects = io::read_objects_csv(gt_path);
-  const std::vector<io::TrackRow> tracks = io::read_tracks_csv(tracks_path);
+  io::TracksCsvColumns columns;
+  const std::vector<io::TrackRow> tracks = io::read_tracks_csv(tracks_path, &columns);
+  const eval::HypothesisSelection selection = eval::parse_selection(o.hypotheses);
+  if (selection == eval::HypothesisSelection::kPerson && !columns.person) {
+    throw core::InputError(tracks_path.string() +
+                           ": no 'person' column (written by an older ringtrack); "
+                           "--hypotheses person needs it: run the sequence again");
+  }
   if (!o.ignore_stamps) {
     io::check_scan_stamps(objects, gt_path.string(), tracks, tracks_path.string());
   }
@@ -135,13 +143,13 @@ eval::TrackingEvalResult evaluate_ringtrack(const fs::path& gt_path, const fs::p
   hyps.reserve(tracks.size());
   for (const io::TrackRow& r : tracks) {
     hyps.push_back({static_cast<std::int64_t>(r.scan), static_cast<std::int64_t>(r.id), r.position,
-                    r.dynamic, r.ever_dynamic});
+                    r.dynamic, r.ever_dynamic, r.person});
   }
   eval::TrackingEvalOptions options;
   options.threshold_m = o.threshold_m;
   options.target_class = o.target_class;
   options.min_points = o.min_points;
-  options.all_hypotheses = o.all_hypotheses;
+  options.hypotheses = selection;
   options.moving_radius_m = o.moving_radius_m;
   return eval::evaluate_tracks(gt, hyps, options);
 }
@@ -294,8 +302,12 @@ void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSum
   } else {
     std::cout << "ground truth: class '" << o.target_class << "' with >= " << o.min_points
               << " hit points; match when distance < " << o.threshold_m << " m; "
-              << (o.all_hypotheses ? "all hypotheses"
-                                   : "paper mode: hypotheses dynamic at least once")
+              << (o.hypotheses == "all"
+                      ? "all hypotheses"
+                      : (o.hypotheses == "person"
+                             ? "person mode: hypotheses flagged person at least once, moving or "
+                               "standing"
+                             : "paper mode: hypotheses dynamic at least once"))
               << "\n";
   }
   for (const SequenceResult& s : sequences) {
@@ -397,7 +409,8 @@ void run_eval(const EvalOptions& o) {
     out["motp_unit"] = "m";
     out["class"] = o.target_class;
     out["min_points"] = o.min_points;
-    out["all_hypotheses"] = o.all_hypotheses;
+    out["hypotheses"] = o.hypotheses;
+    out["all_hypotheses"] = o.hypotheses == "all";
     out["moving_radius_m"] = o.moving_radius_m;
   }
   out["sequences"] = nlohmann::ordered_json::array();
@@ -457,9 +470,15 @@ void register_eval(CLI::App& app) {
   cmd->add_option("--min-iou", o->min_iou, "motchallenge: a pair matches when IoU >= this")
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
-  cmd->add_flag("--all-hypotheses", o->all_hypotheses,
-                "evaluate every hypothesis (default, as the paper: only those dynamic at least "
-                "once)");
+  auto* selection =
+      cmd->add_option("--hypotheses", o->hypotheses,
+                      "hypotheses to evaluate, each in all its scans: dynamic = those dynamic at "
+                      "least once (the paper's mode), person = those flagged person at least "
+                      "once (standing people too), all = every one")
+          ->check(CLI::IsMember({"dynamic", "person", "all"}))
+          ->capture_default_str();
+  cmd->add_flag("--all-hypotheses", o->all_hypotheses, "the same as --hypotheses all")
+      ->excludes(selection);
   cmd->add_option("--class", o->target_class, "ground-truth class to evaluate")
       ->capture_default_str();
   cmd->add_option("--min-points", o->min_points,
@@ -478,7 +497,10 @@ void register_eval(CLI::App& app) {
       "--filtered", o->filtered,
       "per sequence: the filtered/ folder of `ringtrack run --filtered-scans`; adds the "
       "map metrics (preservation and rejection rates, docs/evaluation.md)");
-  cmd->callback([o] { run_eval(*o); });
+  cmd->callback([o] {
+    if (o->all_hypotheses) o->hypotheses = "all";
+    run_eval(*o);
+  });
 }
 
 }  // namespace ringtrack::cli

@@ -24,6 +24,7 @@ inline io::TrackRow track_row(std::uint64_t scan, std::int64_t stamp_ns,
   row.ever_dynamic = h.ever_dynamic;
   row.age = static_cast<std::uint32_t>(h.age_scans);
   row.points = static_cast<std::uint32_t>(h.points);
+  row.person = h.person;
   return row;
 }
 

@@ -34,7 +34,9 @@ class BenchmarkCli : public ::testing::Test {
   static void SetUpTestSuite() {
     dir_ = new fs::path(testing::make_temp_dir("ringtrack_benchmark_cli"));
     result_ = new testing::CommandResult(run_command(
-        kCli + " benchmark --scenarios 1,7 --duration 3 --seed 5 --no-plot --json --out " +
+        kCli +
+        " benchmark --scenarios 1,7 --duration 3 --seed 5 --no-plot --person-figures --json "
+        "--out " +
         (*dir_ / "bench").string()));
   }
   static void TearDownTestSuite() {
@@ -94,7 +96,8 @@ TEST_F(BenchmarkCli, WritesReportTimingAndJson) {
         "| 7 hall (moving) | 30 |", "**all static**", "**all moving**", "**overall**",
         "paper: simulated, static sensor | 0.677 | 0.044 | 0.75 / 0.25 / 0.00",
         "paper: simulated, moving sensor | 0.533 | 0.033 | 0.57 / 0.40 / 0.03",
-        "InLiDa (real, indoor; not comparable) | 0.562", "## Time per stage (ms per scan)"}) {
+        "InLiDa (real, indoor; not comparable) | 0.562", "## Time per stage (ms per scan)",
+        "## Accuracy in person mode (standing people included)"}) {
     EXPECT_NE(report.find(needle), std::string::npos) << needle;
   }
 }
@@ -142,7 +145,7 @@ TEST_F(BenchmarkCli, ReportsHorizontalMotpAndMovingObjectsOnly) {
        at = report.find("| 7 hall (moving) |", at + 1)) {
     ++rows;
   }
-  EXPECT_EQ(rows, 3u);  // accuracy, moving objects only, time per stage
+  EXPECT_EQ(rows, 4u);  // accuracy, moving objects only, person mode, time per stage
 }
 
 // The benchmark's in-memory path must give exactly what the file-based tools give.
@@ -192,6 +195,18 @@ TEST_F(BenchmarkCli, MatchesSimulateRunEval) {
                             "hypothesis_presences"}) {
       EXPECT_EQ(bm[key], em[key]) << "scenario " << scenario << ": moving only " << key;
     }
+    // --person-figures: the same counts as `eval --hypotheses person` on run's tracks.csv.
+    r = run_command(kCli + " eval --json --hypotheses person --gt " + seq.string() + " --tracks " +
+                    (run / "tracks.csv").string());
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto pe = nlohmann::json::parse(r.out)["overall"];
+    ASSERT_TRUE(c.contains("person_mode")) << scenario;
+    const auto& pm = c["person_mode"]["metrics"];
+    for (const char* key : {"matches", "false_positives", "misses", "id_switches", "gt_presences",
+                            "hypothesis_presences", "hypotheses"}) {
+      EXPECT_EQ(pm[key], pe[key]) << "scenario " << scenario << ": person mode " << key;
+    }
+    EXPECT_EQ(pm["gt_presences"], m["gt_presences"]) << "the same ground truth";
     if (!m["motp_horizontal"].is_null()) {
       EXPECT_NEAR(m["motp_horizontal"].get<double>(), ev["motp_horizontal"].get<double>(), 1e-3);
       EXPECT_NEAR(m["mean_vertical_error"].get<double>(), ev["mean_vertical_error"].get<double>(),
@@ -219,10 +234,12 @@ TEST(BenchmarkValidationCli, RunsTheValidationSetAsItsOwnGroup) {
     fp += c["metrics"]["false_positives"].get<long>();
   }
   EXPECT_FALSE(j["groups"].contains("all static"));
+  EXPECT_FALSE(j["cases"][0].contains("person_mode"));  // only with --person-figures
   EXPECT_TRUE(j["groups"].contains("validation static"));
   EXPECT_TRUE(j["groups"].contains("validation moving"));
   EXPECT_EQ(j["groups"]["validation overall"]["metrics"]["false_positives"].get<long>(), fp);
   const std::string report = read(dir / "v" / "report.md");
+  EXPECT_EQ(report.find("person mode"), std::string::npos);
   for (const char* needle :
        {"| V v1-plaza-groups (static) | 20 |", "| V v4-parking (moving) | 20 |",
         "**validation static**", "**validation moving**", "never used to tune the defaults"}) {

@@ -153,6 +153,55 @@ TEST_F(EvalCli, AllHypothesesClassAndThreshold) {
   EXPECT_TRUE(strict["mota"].is_null());
 }
 
+// Person mode (issue 10): the same ground truth, the hypotheses flagged person. Person 2 stands
+// (never farther than 0.6 m from where it started); its track is never dynamic.
+TEST_F(EvalCli, PersonModeScoresTheStandingPerson) {
+  const auto row = [](int scan, int id, double x, double y, bool dynamic, bool person) {
+    std::string r = track(scan, id, x, y, dynamic);
+    r.pop_back();  // the newline
+    return r + (person ? ",1\n" : ",0\n");
+  };
+  std::string tracks = kTracksHeader + ",person\n";
+  for (int s = 0; s < 4; ++s) {
+    tracks += row(s, 10, 0.2 * s + 0.1, 0.0, s >= 1, true);
+    tracks += row(s, 20, 5.0, 0.2 * s + 0.05, false, s >= 2);  // person 2 hidden in scan 3
+  }
+  write(dir() / "tracks_person.csv", tracks);
+  const std::string files =
+      "--gt " + quoted(dir()) + " --tracks " + quoted(dir() / "tracks_person.csv");
+  const auto paper = run_json(files);
+  EXPECT_EQ(paper["hypotheses"], "dynamic");
+  EXPECT_EQ(paper["sequences"][0]["hypotheses_evaluated"], 1);
+  EXPECT_EQ(paper["overall"]["gt_presences"], 7);
+  EXPECT_EQ(paper["overall"]["matches"], 4);
+  EXPECT_EQ(paper["overall"]["misses"], 3);  // the standing person in scans 0-2
+  EXPECT_EQ(paper["overall"]["false_positives"], 0);
+  const auto person = run_json(files + " --hypotheses person");
+  EXPECT_EQ(person["hypotheses"], "person");
+  EXPECT_EQ(person["all_hypotheses"], false);
+  EXPECT_EQ(person["sequences"][0]["hypotheses_evaluated"], 2);
+  EXPECT_EQ(person["overall"]["gt_presences"], 7);
+  EXPECT_EQ(person["overall"]["matches"], 7);
+  EXPECT_EQ(person["overall"]["misses"], 0);
+  EXPECT_EQ(person["overall"]["false_positives"], 1);  // track 20 while person 2 is hidden
+  EXPECT_NEAR(person["overall"]["mota"].get<double>(), 6.0 / 7.0, 1e-9);
+  const auto text = run_command(kCli + " eval " + files + " --hypotheses person");
+  ASSERT_EQ(text.exit_code, 0) << text.err;
+  EXPECT_NE(text.out.find("person mode"), std::string::npos);
+  // --all-hypotheses is --hypotheses all; the two together are refused.
+  EXPECT_EQ(run_json(files + " --all-hypotheses")["hypotheses"], "all");
+  EXPECT_NE(run_command(kCli + " eval " + files + " --all-hypotheses --hypotheses all").exit_code,
+            0);
+  // A tracks.csv from before the person column: paper mode works, person mode names the column.
+  EXPECT_EQ(run_json("--gt " + quoted(dir()) + " --tracks " +
+                     quoted(dir() / "tracks.csv"))["overall"]["matches"],
+            6);
+  const auto old = run_command(kCli + " eval --gt " + quoted(dir()) + " --tracks " +
+                               quoted(dir() / "tracks.csv") + " --hypotheses person");
+  EXPECT_EQ(old.exit_code, 1);
+  EXPECT_NE(old.err.find("no 'person' column"), std::string::npos) << old.err;
+}
+
 TEST_F(EvalCli, SequenceListIsSummed) {
   const std::string pair = " --gt " + quoted(dir()) + " --tracks " + quoted(dir() / "tracks.csv");
   const auto j = run_json(pair + pair);

@@ -307,6 +307,10 @@ class Schema {
     integer("report_missed_scans", t.report_missed_scans, 0, 1000000,
             "a hypothesis missed in more consecutive scans than this is kept (for its id) but not "
             "reported, unless the scan shows it hidden behind something (occluded)");
+    integer("person_min_scans", t.person_min_scans, 1, 1000000,
+            "a confirmed hypothesis is flagged person (tracks.csv column person, kept once set, "
+            "moving or standing) once this many of its scans had a strict, person-shaped "
+            "detection (relaxed ones do not count)");
     integer("occluded_coast_scans", t.occluded_coast_scans, 0, 1000000,
             "a hypothesis whose predicted points are occluded (something in front) is kept this "
             "many missed scans even when its covariance would delete it");

@@ -101,6 +101,27 @@ std::optional<Eigen::Vector3d> motion_position(const GroundTruthObject& o) {
 
 }  // namespace
 
+const char* selection_name(HypothesisSelection selection) {
+  switch (selection) {
+    case HypothesisSelection::kEverDynamic:
+      return "dynamic";
+    case HypothesisSelection::kPerson:
+      return "person";
+    case HypothesisSelection::kAll:
+      return "all";
+  }
+  return "dynamic";
+}
+
+HypothesisSelection parse_selection(const std::string& name) {
+  for (const auto s : {HypothesisSelection::kEverDynamic, HypothesisSelection::kPerson,
+                       HypothesisSelection::kAll}) {
+    if (name == selection_name(s)) return s;
+  }
+  throw core::InputError("evaluation: unknown hypothesis selection '" + name +
+                         "' (expected dynamic, person or all)");
+}
+
 std::vector<std::int64_t> moving_objects(std::span<const GroundTruthObject> ground_truth,
                                          double radius_m) {
   if (!(radius_m >= 0.0) || !std::isfinite(radius_m)) {
@@ -149,14 +170,18 @@ TrackingEvalResult evaluate_tracks(std::span<const GroundTruthObject> ground_tru
   result.gt_rows_used = static_cast<std::int64_t>(gt.size());
 
   std::set<std::int64_t> all_ids;
-  std::set<std::int64_t> dynamic_ids;
+  std::set<std::int64_t> selected_ids;
   for (const TrackObservation& t : tracks) {
     all_ids.insert(t.id);
-    if (t.dynamic || t.ever_dynamic) dynamic_ids.insert(t.id);
+    const bool selected = options.hypotheses == HypothesisSelection::kAll ||
+                          (options.hypotheses == HypothesisSelection::kEverDynamic &&
+                           (t.dynamic || t.ever_dynamic)) ||
+                          (options.hypotheses == HypothesisSelection::kPerson && t.person);
+    if (selected) selected_ids.insert(t.id);
   }
   std::vector<const TrackObservation*> hyp;
   for (const TrackObservation& t : tracks) {
-    if (!options.all_hypotheses && dynamic_ids.count(t.id) == 0) continue;
+    if (selected_ids.count(t.id) == 0) continue;
     if (!t.position_m.allFinite()) {
       throw core::InputError("evaluation: track " + std::to_string(t.id) + " in scan " +
                              std::to_string(t.scan) + " has a non-finite position");
@@ -164,8 +189,7 @@ TrackingEvalResult evaluate_tracks(std::span<const GroundTruthObject> ground_tru
     hyp.push_back(&t);
   }
   result.hypotheses_total = static_cast<std::int64_t>(all_ids.size());
-  result.hypotheses_evaluated =
-      static_cast<std::int64_t>(options.all_hypotheses ? all_ids.size() : dynamic_ids.size());
+  result.hypotheses_evaluated = static_cast<std::int64_t>(selected_ids.size());
 
   const auto gt_presences = group_by_frame(
       gt, [](const GroundTruthObject& o) { return o.scan; }, "ground-truth object");

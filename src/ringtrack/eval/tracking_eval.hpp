@@ -33,6 +33,14 @@ struct TrackObservation {
   Eigen::Vector3d position_m{};  ///< world frame
   bool dynamic = false;          ///< classified dynamic in this scan
   bool ever_dynamic = false;     ///< classified dynamic in this or an earlier scan
+  bool person = false;           ///< flagged person (person-shaped, confirmed) in this scan
+};
+
+/// Which hypotheses the 3-D evaluation scores; a selected track id counts in all its scans.
+enum class HypothesisSelection {
+  kEverDynamic,  ///< paper mode: ids flagged dynamic or ever_dynamic in at least one scan
+  kPerson,       ///< ids flagged person in at least one scan, whether they moved or not
+  kAll,          ///< every id
 };
 
 /// Options of the 3-D evaluation.
@@ -43,9 +51,8 @@ struct TrackingEvalOptions {
   std::string target_class = "person";
   /// Only ground-truth objects with at least this many hit points in a scan count in that scan.
   std::int64_t min_points = 1;
-  /// False (paper mode): only hypotheses flagged dynamic in at least one scan are evaluated, in
-  /// all their scans. True: every hypothesis.
-  bool all_hypotheses = false;
+  /// Which hypotheses are evaluated (default: the paper's mode).
+  HypothesisSelection hypotheses = HypothesisSelection::kEverDynamic;
   /// For the "moving objects only" figures: an object moves when its horizontal position leaves
   /// the disc of this radius around its first position (metres, >= 0).
   double moving_radius_m = 1.0;
@@ -62,8 +69,13 @@ struct TrackingEvalResult {
   std::int64_t gt_rows_used = 0;      ///< ground-truth rows that passed class and min_points
   std::int64_t gt_rows_skipped = 0;   ///< rows of another class or with too few points
   std::int64_t hypotheses_total = 0;  ///< distinct track ids in the input
-  std::int64_t hypotheses_evaluated = 0;  ///< distinct track ids kept (paper mode: ever dynamic)
+  std::int64_t hypotheses_evaluated = 0;  ///< distinct track ids kept by the selection
 };
+
+/// The option's name: "dynamic", "person" or "all".
+[[nodiscard]] const char* selection_name(HypothesisSelection selection);
+/// Parses "dynamic", "person" or "all"; throws core::InputError naming the value otherwise.
+[[nodiscard]] HypothesisSelection parse_selection(const std::string& name);
 
 /// Ids (ascending) of the objects whose horizontal (x-y) position is ever farther than radius_m
 /// from their first position. The position of a row is its true centre when finite, else its

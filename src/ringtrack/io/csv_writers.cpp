@@ -51,6 +51,7 @@ std::string format_track_row(const TrackRow& row) {
   out += std::to_string(row.age);
   out += ',';
   out += std::to_string(row.points);
+  out += row.person ? ",1" : ",0";
   return out;
 }
 

@@ -17,7 +17,7 @@ namespace ringtrack::io {
 /// Header line of tracks.csv (docs/formats.md).
 inline constexpr std::string_view kTracksCsvHeader =
     "scan,stamp,id,x,y,z,vx,vy,vz,min_x,min_y,min_z,max_x,max_y,max_z,dynamic,ever_dynamic,age,"
-    "points";
+    "points,person";
 /// Header line of objects.csv (docs/formats.md).
 inline constexpr std::string_view kObjectsCsvHeader =
     "scan,stamp,id,class,points,x,y,z,min_x,min_y,min_z,max_x,max_y,max_z,true_x,true_y,true_z,"
@@ -35,6 +35,7 @@ struct TrackRow {
   bool ever_dynamic{false};                           ///< dynamic in this or any earlier scan
   std::uint32_t age{0};                               ///< scans since the hypothesis started
   std::uint32_t points{0};                            ///< points of its detection (0: none)
+  bool person{false};  ///< person-shaped and confirmed, moving or not (tracking::Hypothesis)
 };
 
 /// Ground truth of one object in one scan, world frame: a row of objects.csv.

@@ -94,6 +94,7 @@ class Table {
     }
   }
 
+  [[nodiscard]] bool has(const char* column) const { return columns_.count(column) != 0; }
   [[nodiscard]] std::string_view raw(const char* column) const {
     return fields_[columns_.at(column)];
   }
@@ -230,8 +231,16 @@ std::vector<ObjectRow> parse_objects(const std::vector<std::string>& lines,
   return rows;
 }
 
-std::vector<TrackRow> parse_tracks(const std::vector<std::string>& lines, const std::string& name) {
-  Table table(lines, name, kTracksCsvHeader);
+// The columns every tracks.csv has: the header before the person column was added (issue 10).
+constexpr std::string_view kTracksCsvRequired =
+    "scan,stamp,id,x,y,z,vx,vy,vz,min_x,min_y,min_z,max_x,max_y,max_z,dynamic,ever_dynamic,age,"
+    "points";
+
+std::vector<TrackRow> parse_tracks(const std::vector<std::string>& lines, const std::string& name,
+                                   TracksCsvColumns* present) {
+  Table table(lines, name, kTracksCsvRequired);
+  const bool has_person = table.has("person");
+  if (present != nullptr) present->person = has_person;
   RowChecks checks(table, "scan");
   std::vector<TrackRow> rows;
   table.for_each_row([&](std::size_t line) {
@@ -246,6 +255,7 @@ std::vector<TrackRow> parse_tracks(const std::vector<std::string>& lines, const 
     r.ever_dynamic = table.flag("ever_dynamic");
     r.age = static_cast<std::uint32_t>(table.integer("age", 0, kMaxU32));
     r.points = static_cast<std::uint32_t>(table.integer("points", 0, kMaxU32));
+    r.person = has_person && table.flag("person");
     checks.add(line, r.scan, r.id, r.stamp_ns);
     rows.push_back(std::move(r));
   });
@@ -316,12 +326,14 @@ std::vector<ObjectRow> read_objects_csv(std::istream& in, const std::string& nam
   return parse_objects(lines_of(in), name);
 }
 
-std::vector<TrackRow> read_tracks_csv(const std::filesystem::path& path) {
-  return parse_tracks(read_lines(path), path.string());
+std::vector<TrackRow> read_tracks_csv(const std::filesystem::path& path,
+                                      TracksCsvColumns* present) {
+  return parse_tracks(read_lines(path), path.string(), present);
 }
 
-std::vector<TrackRow> read_tracks_csv(std::istream& in, const std::string& name) {
-  return parse_tracks(lines_of(in), name);
+std::vector<TrackRow> read_tracks_csv(std::istream& in, const std::string& name,
+                                      TracksCsvColumns* present) {
+  return parse_tracks(lines_of(in), name, present);
 }
 
 std::vector<MotChallengeRow> read_motchallenge(const std::filesystem::path& path,

@@ -31,10 +31,19 @@ struct MotChallengeRow {
 /// Same from a stream; name is used in error messages.
 [[nodiscard]] std::vector<ObjectRow> read_objects_csv(std::istream& in, const std::string& name);
 
-/// Reads tracks.csv; same rules as read_objects_csv (the position must be finite).
-[[nodiscard]] std::vector<TrackRow> read_tracks_csv(const std::filesystem::path& path);
+/// Optional columns of tracks.csv: files written before they existed lack them.
+struct TracksCsvColumns {
+  bool person{false};  ///< the person flag (added in issue 10; absent: every row reads 0)
+};
+
+/// Reads tracks.csv; same rules as read_objects_csv (the position must be finite). The person
+/// column is optional (older files): without it every row has person = false, and `present`
+/// (when given) tells which optional columns the file has.
+[[nodiscard]] std::vector<TrackRow> read_tracks_csv(const std::filesystem::path& path,
+                                                    TracksCsvColumns* present = nullptr);
 /// Same from a stream; name is used in error messages.
-[[nodiscard]] std::vector<TrackRow> read_tracks_csv(std::istream& in, const std::string& name);
+[[nodiscard]] std::vector<TrackRow> read_tracks_csv(std::istream& in, const std::string& name,
+                                                    TracksCsvColumns* present = nullptr);
 
 /// Reads a MOTChallenge file (no header; comma- or whitespace-separated; >= 6 columns). With
 /// ground_truth, rows whose 7th column (the "consider" flag) is 0 are dropped, as MOTChallenge

@@ -225,6 +225,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
     report_velocity(h);
     classify(h);
     decide_report(h);
+    update_person_flag(h);
   }
   visibility_ = nullptr;  // the scan may not outlive this call
   return hypotheses_;
@@ -400,6 +401,15 @@ void Tracker::decide_report(Hypothesis& h) const {
   h.confirmed = h.confirmed || h.hits >= config_.confirm_hits;
   h.reported = h.confirmed && (h.missed_scans == 0 || h.occluded ||
                                 (h.missed_scans <= config_.report_missed_scans && !h.unseen));
+}
+
+void Tracker::update_person_flag(Hypothesis& h) const {
+  // The strict object model is a person's size (height, footprint); a relaxed detection may be
+  // any clutter near the prediction and says nothing about the shape. Counted, not required in a
+  // row: a partial occlusion (relaxed, missed) pauses the count without resetting it. Sticky, so
+  // a user filtering on the flag keeps a person who later walks behind something.
+  if (h.detection >= 0 && !h.last_detection.relaxed) ++h.person_scans;
+  h.person = h.person || (h.confirmed && h.person_scans >= config_.person_min_scans);
 }
 
 void Tracker::report_velocity(Hypothesis& h) const {

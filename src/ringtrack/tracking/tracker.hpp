@@ -45,6 +45,9 @@ struct Hypothesis {
   int hits{0};               ///< scans with an assigned detection, the creating one included
   bool confirmed{false};     ///< had confirm_hits detections: no longer a possible one-scan blip
   bool reported{false};      ///< confirmed and recently measured (or hidden): what outputs list
+  int person_scans{0};       ///< scans with a strict (person-shaped, not relaxed) detection
+  bool person{false};        ///< confirmed and person-shaped in person_min_scans scans; stays set
+                             ///< (moving or not, see docs/tracking.md "Standing people")
   std::vector<Eigen::Vector3f> anchor_points;  ///< sample of the anchor detection's world points
   std::vector<Eigen::Vector3f> last_points;    ///< sample of the last detection's world points
   Eigen::Vector3d anchor_viewpoint{Eigen::Vector3d::Zero()};  ///< sensor position when anchored
@@ -128,6 +131,7 @@ class Tracker {
   void look_for_missed(Hypothesis& h) const;
   void report_velocity(Hypothesis& h) const;
   void decide_report(Hypothesis& h) const;
+  void update_person_flag(Hypothesis& h) const;
 
   core::TrackingConfig config_;
   double min_speed_mps_;

@@ -60,11 +60,62 @@ TEST(EvaluateTracks, PaperModeKeepsEverDynamicHypothesesInAllTheirScans) {
   EXPECT_NEAR(paper.summary.motp(), 0.05, 1e-12);
 
   TrackingEvalOptions all;
-  all.all_hypotheses = true;
+  all.hypotheses = HypothesisSelection::kAll;
   const TrackingEvalResult every = evaluate_tracks(gt, tracks, all);
   EXPECT_EQ(every.hypotheses_evaluated, 2);
   EXPECT_EQ(every.summary.false_positives, 4);
   EXPECT_DOUBLE_EQ(every.summary.mota(), 0.0);
+}
+
+// Person mode (issue 10): a person standing all the time is tracked by a hypothesis that is
+// never dynamic but flagged person. Paper mode drops that hypothesis, so the standing person is
+// a miss in every scan; person mode scores it as a hit. Both keep the same ground truth.
+TEST(EvaluateTracks, PersonModeScoresAStandingPersonThatPaperModeMisses) {
+  std::vector<GroundTruthObject> gt;
+  std::vector<TrackObservation> tracks;
+  for (std::int64_t s = 0; s < 10; ++s) {
+    gt.push_back(person(s, 1, 0.3 * static_cast<double>(s)));  // walks
+    gt.push_back(person(s, 2, 20.0));                          // stands all the time
+    // Walker's track: dynamic from scan 3, person from scan 2.
+    tracks.push_back({s, 11, Eigen::Vector3d(0.3 * static_cast<double>(s) + 0.05, 0, 0), s >= 3,
+                      s >= 3, s >= 2});
+    // Stander's track: never dynamic, person from scan 4 (scored in all its scans, as paper
+    // mode scores an ever-dynamic id in all its scans).
+    tracks.push_back({s, 12, Eigen::Vector3d(20.1, 0, 0), false, false, s >= 4});
+    // Person-sized clutter in scans 0-4: never dynamic, flagged person: false positives in
+    // person mode.
+    if (s < 5) tracks.push_back({s, 13, Eigen::Vector3d(-7.0, 0, 0), false, false, true});
+    // A short track never flagged person: in neither mode.
+    if (s < 3) tracks.push_back({s, 14, Eigen::Vector3d(9.0, 0, 0), false, false, false});
+  }
+  const TrackingEvalResult paper = evaluate_tracks(gt, tracks);
+  EXPECT_EQ(paper.hypotheses_evaluated, 1);
+  EXPECT_EQ(paper.summary.gt_presences, 20);
+  EXPECT_EQ(paper.summary.matches, 10);
+  EXPECT_EQ(paper.summary.misses, 10);  // the standing person, every scan
+  EXPECT_EQ(paper.summary.false_positives, 0);
+  EXPECT_DOUBLE_EQ(paper.summary.mota(), 0.5);
+
+  TrackingEvalOptions options;
+  options.hypotheses = HypothesisSelection::kPerson;
+  const TrackingEvalResult person_mode = evaluate_tracks(gt, tracks, options);
+  EXPECT_EQ(person_mode.hypotheses_total, 4);
+  EXPECT_EQ(person_mode.hypotheses_evaluated, 3);
+  EXPECT_EQ(person_mode.summary.gt_presences, 20);  // the same ground truth
+  EXPECT_EQ(person_mode.summary.matches, 20);       // the standing person in all 10 scans
+  EXPECT_EQ(person_mode.summary.misses, 0);
+  EXPECT_EQ(person_mode.summary.false_positives, 5);  // the clutter
+  EXPECT_DOUBLE_EQ(person_mode.summary.mota(), 0.75);
+  EXPECT_EQ(person_mode.summary.mostly_tracked, 2);
+  EXPECT_EQ(paper.summary.mostly_lost, 1);
+}
+
+TEST(EvaluateTracks, SelectionNamesRoundTrip) {
+  for (const auto s :
+       {HypothesisSelection::kEverDynamic, HypothesisSelection::kPerson, HypothesisSelection::kAll})
+    EXPECT_EQ(parse_selection(selection_name(s)), s);
+  EXPECT_STREQ(selection_name(HypothesisSelection::kEverDynamic), "dynamic");
+  EXPECT_THROW((void)parse_selection("persons"), core::InputError);
 }
 
 TEST(EvaluateTracks, DistanceMustBeStrictlyBelowThreshold) {

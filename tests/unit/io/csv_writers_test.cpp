@@ -22,6 +22,7 @@ TEST(CsvWriters, TracksCsvHasTheDocumentedSchema) {
   a.ever_dynamic = true;
   a.age = 12;
   a.points = 40;
+  a.person = true;
   TrackRow b;  // a hypothesis without a detection in this scan: empty box
   b.scan = 3;
   b.stamp_ns = 300'000'000;
@@ -34,11 +35,11 @@ TEST(CsvWriters, TracksCsvHasTheDocumentedSchema) {
   EXPECT_EQ(
       test::read_text(dir / "tracks.csv"),
       "scan,stamp,id,x,y,z,vx,vy,vz,min_x,min_y,min_z,max_x,max_y,max_z,dynamic,ever_dynamic,"
-      "age,points\n"
+      "age,points,person\n"
       "3,0.300000000,17,1.2346,-2.0000,0.9000,1.0000,0.0000,0.0000,1.0000,-2.2500,0.0000,"
-      "1.5000,-1.7500,1.7500,1,1,12,40\n"
+      "1.5000,-1.7500,1.7500,1,1,12,40,1\n"
       "3,0.300000000,18,0.0000,0.0000,0.0000,0.0000,0.0000,0.0000,nan,nan,nan,nan,nan,nan,0,0,"
-      "0,0\n");
+      "0,0,0\n");
 }
 
 TEST(CsvWriters, ObjectsCsvHasTheDocumentedSchema) {

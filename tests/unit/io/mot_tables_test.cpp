@@ -16,15 +16,19 @@ namespace {
 
 const std::string kObjectsHead = std::string(kObjectsCsvHeader) + "\n";
 const std::string kTracksHead = std::string(kTracksCsvHeader) + "\n";
+// tracks.csv as written before the person column (issue 10): still readable.
+const std::string kOldTracksHead =
+    "scan,stamp,id,x,y,z,vx,vy,vz,min_x,min_y,min_z,max_x,max_y,max_z,dynamic,ever_dynamic,age,"
+    "points\n";
 
 std::vector<ObjectRow> objects(const std::string& text) {
   std::istringstream in(text);
   return read_objects_csv(in, "objects.csv");
 }
 
-std::vector<TrackRow> tracks(const std::string& text) {
+std::vector<TrackRow> tracks(const std::string& text, TracksCsvColumns* present = nullptr) {
   std::istringstream in(text);
-  return read_tracks_csv(in, "tracks.csv");
+  return read_tracks_csv(in, "tracks.csv", present);
 }
 
 // Expects an InputError whose message contains every fragment.
@@ -117,6 +121,43 @@ TEST(TracksCsv, RoundTripsTheWriterFormat) {
   EXPECT_EQ(rows[0].points, 40u);
 }
 
+TEST(TracksCsv, PersonFlagRoundTripsAndOldFilesReadAsNotPerson) {
+  TrackRow a;
+  a.scan = 2;
+  a.id = 5;
+  a.position = {1.0, 2.0, 0.9};
+  a.person = true;
+  TrackRow b = a;
+  b.id = 6;
+  b.person = false;
+  TracksCsvColumns present;
+  const auto rows =
+      tracks(kTracksHead + format_track_row(a) + "\n" + format_track_row(b) + "\n", &present);
+  ASSERT_EQ(rows.size(), 2u);
+  EXPECT_TRUE(present.person);
+  EXPECT_TRUE(rows[0].person);
+  EXPECT_FALSE(rows[1].person);
+  // The column is found by name, wherever it stands.
+  const auto moved = tracks(
+      "person,scan,stamp,id,x,y,z,vx,vy,vz,min_x,min_y,min_z,max_x,max_y,max_z,dynamic,"
+      "ever_dynamic,age,points\n1,0,0.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n");
+  ASSERT_EQ(moved.size(), 1u);
+  EXPECT_TRUE(moved[0].person);
+  // A file from before the column: readable, every row not a person, and the caller is told.
+  present.person = true;
+  const auto old =
+      tracks(kOldTracksHead + "0,0.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,1,1,1,5\n", &present);
+  ASSERT_EQ(old.size(), 1u);
+  EXPECT_FALSE(present.person);
+  EXPECT_FALSE(old[0].person);
+  EXPECT_TRUE(old[0].ever_dynamic);
+  expect_error(
+      [&] {
+        (void)tracks(kTracksHead + "0,0.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5,yes\n");
+      },
+      {"tracks.csv:2", "column 'person'", "0 or 1"});
+}
+
 TEST(TracksCsv, ErrorsNameFileLineAndColumn) {
   expect_error([] { (void)tracks("scan,stamp,id,x,y,z\n"); },
                {"tracks.csv:1", "missing column 'vx'"});
@@ -124,48 +165,48 @@ TEST(TracksCsv, ErrorsNameFileLineAndColumn) {
   const std::string good = "0,0.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n";
   expect_error(
       [&] {
-        (void)tracks(kTracksHead + good +
+        (void)tracks(kOldTracksHead + good +
                      "1,0.1,1,abc,2,3,0,0,0,nan,nan,nan,nan,"
                      "nan,nan,0,0,1,5\n");
       },
       {"tracks.csv:3", "column 'x'", "'abc'"});
   expect_error(
       [&] {
-        (void)tracks(kTracksHead +
+        (void)tracks(kOldTracksHead +
                      "0,0.0,1,nan,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,"
                      "0,1,5\n");
       },
       {"tracks.csv:2", "column 'x'", "finite"});
   expect_error(
       [&] {
-        (void)tracks(kTracksHead +
+        (void)tracks(kOldTracksHead +
                      "0,0.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,2,0,"
                      "1,5\n");
       },
       {"tracks.csv:2", "column 'dynamic'", "0 or 1"});
-  expect_error([&] { (void)tracks(kTracksHead + "0,0.0,1,1,2\n"); },
+  expect_error([&] { (void)tracks(kOldTracksHead + "0,0.0,1,1,2\n"); },
                {"tracks.csv:2", "expected 19 comma-separated fields"});
-  expect_error([&] { (void)tracks(kTracksHead + good + good); },
+  expect_error([&] { (void)tracks(kOldTracksHead + good + good); },
                {"tracks.csv:3", "id 1 appears twice in scan 0", "line 2"});
   expect_error(
       [&] {
-        (void)tracks(kTracksHead + good +
+        (void)tracks(kOldTracksHead + good +
                      "0,0.5,2,1,2,3,0,0,0,nan,nan,nan,nan,nan,"
                      "nan,0,0,1,5\n");
       },
       {"tracks.csv:3", "scan 0 has stamp 0.500000000"});
   expect_error(
       [&] {
-        (void)tracks(kTracksHead +
+        (void)tracks(kOldTracksHead +
                      "-1,0.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,"
                      "1,5\n");
       },
       {"tracks.csv:2", "column 'scan'"});
-  expect_error([&] { (void)tracks(kTracksHead + "0,0.0,1,1,2,3,0,0,0,0,0,0,-1,0,0,0,0,1,5\n"); },
+  expect_error([&] { (void)tracks(kOldTracksHead + "0,0.0,1,1,2,3,0,0,0,0,0,0,-1,0,0,0,0,1,5\n"); },
                {"tracks.csv:2", "min <= max"});
   expect_error(
       [&] {
-        (void)tracks(kTracksHead +
+        (void)tracks(kOldTracksHead +
                      "0,5.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,"
                      "1,5\n" +
                      "1,4.0,1,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n");
@@ -224,11 +265,11 @@ TEST(MotChallenge, Errors) {
 TEST(CheckScanStamps, DetectsShiftedScanIndices) {
   const auto gt = objects(kObjectsHead + "0,0.0,1,person,3,0,0,0,0,0,0,1,1,1,0,0,0,1\n" +
                           "1,0.1,1,person,3,0,0,0,0,0,0,1,1,1,0,0,0,1\n");
-  const auto ok = tracks(kTracksHead + "1,0.1,4,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n" +
+  const auto ok = tracks(kOldTracksHead + "1,0.1,4,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n" +
                          "2,0.2,4,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n");
   EXPECT_NO_THROW(check_scan_stamps(gt, "objects.csv", ok, "tracks.csv"));
   const auto shifted =
-      tracks(kTracksHead + "0,0.1,4,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n");
+      tracks(kOldTracksHead + "0,0.1,4,1,2,3,0,0,0,nan,nan,nan,nan,nan,nan,0,0,1,5\n");
   expect_error([&] { check_scan_stamps(gt, "objects.csv", shifted, "tracks.csv"); },
                {"scan 0 has stamp 0.000000000 in objects.csv but 0.100000000 in tracks.csv"});
 }

@@ -536,3 +536,97 @@ TEST(TrackerReport, BlipsNeverReportedLostTracksHiddenButKept) {
 
 }  // namespace
 }  // namespace ringtrack::tracking
+
+namespace ringtrack::tracking {
+namespace {
+
+// The person flag (docs/tracking.md, "Standing people"): confirmed and person_min_scans strict
+// detections, kept once set, independent of motion.
+TEST(TrackerPerson, StandingPersonIsFlaggedAtScanNAndNeverTurnsDynamic) {
+  const core::TrackingConfig config;
+  const int n = config.person_min_scans;
+  ASSERT_GE(n, config.confirm_hits);  // else confirmation, not the count, decides the scan
+  Tracker tracker(config);
+  std::mt19937_64 noise(7);
+  PersonShape shape;
+  shape.centroid_noise_m = 0.04f;
+  shape.box_noise_m = 0.03f;
+  for (int k = 1; k <= 600; ++k) {  // one minute at 10 Hz
+    const auto& hs =
+        tracker.update({person_detection({6.0f, -2.0f, 0.0f}, shape, &noise)}, scan_stamp_ns(k));
+    ASSERT_EQ(hs.size(), 1u) << "scan " << k;
+    const Hypothesis& h = hs.front();
+    EXPECT_EQ(h.person, k >= n) << "scan " << k;
+    EXPECT_EQ(h.person_scans, k);
+    EXPECT_FALSE(h.dynamic) << "scan " << k;
+    EXPECT_FALSE(h.ever_dynamic) << "scan " << k;
+    EXPECT_TRUE(h.reported || k < config.confirm_hits) << "scan " << k;
+  }
+}
+
+TEST(TrackerPerson, RelaxedDetectionsDoNotCountButDoNotResetEither) {
+  core::TrackingConfig config;
+  config.person_min_scans = 5;
+  Tracker tracker(config);
+  int k = 0;
+  const auto strict = person_detection({3.0f, 3.0f, 0.0f}, {});
+  auto relaxed = strict;
+  relaxed.relaxed = true;
+  tracker.update({strict}, scan_stamp_ns(++k));  // a strict detection starts the track
+  for (int i = 0; i < 100; ++i) {
+    const auto& hs = tracker.update({relaxed}, scan_stamp_ns(++k));
+    ASSERT_EQ(hs.size(), 1u);
+    EXPECT_TRUE(hs.front().confirmed);
+    EXPECT_FALSE(hs.front().person) << "relaxed scan " << i;
+    EXPECT_EQ(hs.front().person_scans, 1);
+  }
+  // Three more strict scans: 4 of 5, still not a person; the fourth makes it one.
+  for (int i = 0; i < 3; ++i) tracker.update({strict}, scan_stamp_ns(++k));
+  EXPECT_FALSE(tracker.hypotheses().front().person);
+  tracker.update({strict}, scan_stamp_ns(++k));
+  EXPECT_TRUE(tracker.hypotheses().front().person);
+  // Kept once set: relaxed and missed scans do not take it away.
+  for (int i = 0; i < 5; ++i) {
+    tracker.update({relaxed}, scan_stamp_ns(++k));
+    tracker.update({}, scan_stamp_ns(++k));
+    ASSERT_EQ(tracker.hypotheses().size(), 1u);
+    EXPECT_TRUE(tracker.hypotheses().front().person);
+  }
+}
+
+TEST(TrackerPerson, OneScanBlipIsNeverAPersonEvenWithACountOfOne) {
+  core::TrackingConfig config;
+  config.person_min_scans = 1;  // only the confirmation stands between a blip and the flag
+  Tracker tracker(config);
+  int k = 0;
+  auto hs = tracker.update({person_detection({8.0f, 1.0f, 0.0f}, {})}, scan_stamp_ns(++k));
+  ASSERT_EQ(hs.size(), 1u);
+  EXPECT_EQ(hs.front().person_scans, 1);
+  EXPECT_FALSE(hs.front().person);
+  while (!tracker.hypotheses().empty()) {
+    ASSERT_LT(k, 100) << "the blip was never deleted";
+    hs = tracker.update({}, scan_stamp_ns(++k));
+    for (const auto& h : hs) EXPECT_FALSE(h.person) << "scan " << k;
+  }
+  // A second detection confirms: then the count of one suffices.
+  const auto d = person_detection({-4.0f, 2.0f, 0.0f}, {});
+  EXPECT_FALSE(tracker.update({d}, scan_stamp_ns(++k)).front().person);
+  EXPECT_TRUE(tracker.update({d}, scan_stamp_ns(++k)).front().person);
+}
+
+TEST(TrackerPerson, WalkerIsPersonAndDynamic) {
+  Tracker tracker{core::TrackingConfig{}};
+  bool was_dynamic = false;
+  for (int k = 1; k <= 60; ++k) {
+    const float x = 0.1f * static_cast<float>(k);  // 1 m/s
+    const auto& hs = tracker.update({person_detection({x, 4.0f, 0.0f}, {})}, scan_stamp_ns(k));
+    ASSERT_EQ(hs.size(), 1u);
+    was_dynamic = was_dynamic || hs.front().dynamic;
+    EXPECT_EQ(hs.front().person, k >= core::TrackingConfig{}.person_min_scans) << "scan " << k;
+  }
+  EXPECT_TRUE(was_dynamic);
+  EXPECT_TRUE(tracker.hypotheses().front().person);
+}
+
+}  // namespace
+}  // namespace ringtrack::tracking
