@@ -323,7 +323,8 @@ void Tracker::look_for_missed(Hypothesis& h) const {
   // Nothing in the scan where it is predicted: no beam ended at its points (seen through,
   // passing beside them, or none there at all: a far object between two beams, an object below
   // a tilted sensor's lowest ring) and nothing hides them. It is kept (one stray beam does not
-  // delete it) but not reported in a scan that shows nothing of it.
+  // delete it) but not reported in a scan that shows nothing of it. (Beams ending inside the
+  // predicted box instead of at the points: static 0.812 instead of 0.820, moving equal.)
   h.unseen = counts.occupied == 0 && !h.occluded;
 }
 
