@@ -49,7 +49,8 @@ void BackgroundRangeModel::reset() {
   background_.assign(n, kNaN);
   candidate_.assign(n, kNaN);
   streak_.assign(n, 0);
-  bin_scan_.assign(static_cast<std::size_t>(bins_), -1);
+  column_bin_.clear();
+  mapped_azimuths_.clear();
   scans_ = 0;
 }
 
@@ -79,38 +80,45 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
                      " columns but " + std::to_string(scan.column_azimuth_rad.size()) +
                      " column azimuths");
   }
-  const auto& status = scan.statuses();
-  const auto& range = scan.ranges();
-  // Bin of each column; two columns of one scan in one bin (a revolution of 1809 firing
-  // sequences): the first wins, the other is skipped (-1).
-  column_bin_.resize(static_cast<std::size_t>(scan.columns()));
-  for (int c = 0; c < scan.columns(); ++c) {
-    const double az = scan.column_azimuth_rad[static_cast<std::size_t>(c)];
-    int bin = -1;
-    if (std::isfinite(az)) {
-      bin = bin_of(az);
-      if (bin_scan_[static_cast<std::size_t>(bin)] == scans_) {
-        bin = -1;
-      } else {
-        bin_scan_[static_cast<std::size_t>(bin)] = scans_;
-      }
-    }
-    column_bin_[static_cast<std::size_t>(c)] = bin;
-  }
+  map_columns(scan);
+  const ReturnStatus* status = scan.statuses().data();
+  const float* range = scan.ranges().data();
+  const auto tolerance = static_cast<float>(config_.tolerance_m);
+  const auto relative = static_cast<float>(config_.relative_tolerance);
+  const auto smoothing = static_cast<float>(config_.smoothing);
+  float* background = background_.data();
+  std::uint16_t* streak = streak_.data();
+  const int columns = scan.columns();
   for (int r = 0; r < rings_; ++r) {
     const std::size_t row = static_cast<std::size_t>(r) * static_cast<std::size_t>(bins_);
-    for (int c = 0; c < scan.columns(); ++c) {
+    const std::size_t scan_row = scan.index(r, 0);
+    for (int c = 0; c < columns; ++c) {
       const int bin = column_bin_[static_cast<std::size_t>(c)];
       if (bin < 0) continue;
-      const auto i = scan.index(r, c);
+      const std::size_t i = scan_row + static_cast<std::size_t>(c);
       const std::size_t cell = row + static_cast<std::size_t>(bin);
       switch (status[i]) {
-        case ReturnStatus::kValid:
-          observe(cell, range[i]);
+        case ReturnStatus::kValid: {
+          // Most returns agree with a learned finite background: that case inline (the same
+          // arithmetic as observe()), everything else in observe().
+          const float bg = background[cell];
+          const float x = range[i];
+          if (std::isfinite(bg) && std::abs(x - bg) <= tolerance + relative * std::min(x, bg)) {
+            background[cell] = bg + smoothing * (x - bg);
+            streak[cell] = 0;
+          } else {
+            observe(cell, x);
+          }
           break;
+        }
         case ReturnStatus::kNoReturn:
         case ReturnStatus::kTooFar:
-          if (config_.learn_no_return) observe(cell, kInf);
+          if (!config_.learn_no_return) break;
+          if (background[cell] == kInf) {
+            streak[cell] = 0;  // open background seen open again (observe()'s first case)
+          } else {
+            observe(cell, kInf);
+          }
           break;
         case ReturnStatus::kTooClose:
           break;  // no evidence either way
@@ -118,6 +126,30 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
     }
   }
   ++scans_;
+}
+
+void BackgroundRangeModel::map_columns(const OrganizedScan& scan) {
+  // A sensor's column azimuths repeat from scan to scan (always in simulation, often in
+  // captures): the last scan's bins are reused then.
+  if (!column_bin_.empty() && scan.column_azimuth_rad == mapped_azimuths_) return;
+  mapped_azimuths_ = scan.column_azimuth_rad;
+  // Bin of each column; two columns of one scan in one bin (a revolution of 1809 firing
+  // sequences): the first wins, the other is skipped (-1).
+  std::vector<char> taken(static_cast<std::size_t>(bins_), 0);
+  column_bin_.resize(static_cast<std::size_t>(scan.columns()));
+  for (int c = 0; c < scan.columns(); ++c) {
+    const double az = scan.column_azimuth_rad[static_cast<std::size_t>(c)];
+    int bin = -1;
+    if (std::isfinite(az)) {
+      bin = bin_of(az);
+      if (taken[static_cast<std::size_t>(bin)] != 0) {
+        bin = -1;
+      } else {
+        taken[static_cast<std::size_t>(bin)] = 1;
+      }
+    }
+    column_bin_[static_cast<std::size_t>(c)] = bin;
+  }
 }
 
 void BackgroundRangeModel::observe(std::size_t cell, float range_m) {

@@ -58,6 +58,7 @@ class BackgroundRangeModel : public SceneMemory {
 
  private:
   [[nodiscard]] int bin_of(double azimuth_rad) const;
+  void map_columns(const OrganizedScan& scan);
   void observe(std::size_t cell, float range_m);
 
   BackgroundRangeConfig config_;
@@ -68,8 +69,8 @@ class BackgroundRangeModel : public SceneMemory {
   std::vector<float> background_;  // NaN: not learned; +inf: open
   std::vector<float> candidate_;   // mean of the current streak of consistent ranges
   std::vector<std::uint16_t> streak_;
-  std::vector<std::int64_t> bin_scan_;  // last scan that wrote each bin (one column per bin)
-  std::vector<int> column_bin_;         // scratch: bin of each column of the current scan
+  std::vector<int> column_bin_;          // bin of each column (-1: a second column in a bin)
+  std::vector<double> mapped_azimuths_;  // the column azimuths column_bin_ was made for
 };
 
 }  // namespace ringtrack::core
