@@ -260,6 +260,10 @@ class Schema {
            "Kalman update: the measurement noise of a detection's centroid is its standard error "
            "(point covariance / points) plus this standard deviation per axis (m: limb swing, "
            "partial views); 0 = update with the association covariance instead");
+    number("few_point_stddev_m", t.few_point_stddev_m, 0.0, 100.0,
+           "association: a detection of one or two points (a far person's sparse or relaxed "
+           "cluster may be any part of the body) has at least this horizontal standard deviation "
+           "(m)");
     number("delete_eigenvalue_m2", t.delete_eigenvalue_m2, 1e-6, 1e6,
            "a hypothesis is deleted once an eigenvalue of its position covariance exceeds this "
            "(m^2); docs/tracking.md converts it to missed scans");

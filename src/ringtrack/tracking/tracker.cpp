@@ -22,6 +22,8 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // Points a hypothesis remembers of a detection for the free-space tests: enough to outvote a
 // few edge beams, few enough that probing costs microseconds.
 constexpr std::size_t kRememberedPoints = 16;
+// Detections of at most this many points get the few-point association covariance.
+constexpr std::size_t kFewPoints = 2;
 
 // What one scan says about a set of remembered points (moved by shift): the verdict of each
 // point whose deciding beam passes within free_space_lateral_m of it.
@@ -138,7 +140,17 @@ double Tracker::gate() const {
 }
 
 Eigen::Matrix3d Tracker::measurement_covariance(const core::Detection& detection) const {
-  return floored_covariance(detection.covariance, config_.measurement_covariance_scale);
+  Eigen::Matrix3d r =
+      floored_covariance(detection.covariance, config_.measurement_covariance_scale);
+  // One or two points (a far person's sparse or relaxed cluster) may be any part of the body:
+  // their spread says nothing about where the object's centre is, and a tight covariance made
+  // the gate reject them beside their own track, which then lost them to a new one.
+  if (detection.indices.size() <= kFewPoints) {
+    const double floor = config_.few_point_stddev_m * config_.few_point_stddev_m;
+    r(0, 0) = std::max(r(0, 0), floor);
+    r(1, 1) = std::max(r(1, 1), floor);
+  }
+  return r;
 }
 
 Eigen::Matrix3d Tracker::update_covariance(const core::Detection& detection) const {
@@ -401,7 +413,7 @@ void Tracker::decide_report(Hypothesis& h) const {
   // object, unless the scan shows the object is hidden where it is predicted.
   h.confirmed = h.confirmed || h.hits >= config_.confirm_hits;
   h.reported = h.confirmed && (h.missed_scans == 0 || h.occluded ||
-                                (h.missed_scans <= config_.report_missed_scans && !h.unseen));
+                               (h.missed_scans <= config_.report_missed_scans && !h.unseen));
 }
 
 void Tracker::update_person_flag(Hypothesis& h) const {

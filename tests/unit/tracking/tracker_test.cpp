@@ -362,6 +362,31 @@ TEST(Tracker, RelaxedDetectionsNeverStartTracksButConfirmThem) {
   EXPECT_TRUE(run.single_identity(1));
 }
 
+// A far person standing, hit by one beam at a different part of the body each scan (left
+// shoulder, right shoulder, 0.25 m either side of the centre): the one-point detection's own
+// spread is the 3 cm floor, and without the few-point floor the gate sends it to a new track.
+TEST(Tracker, OnePointDetectionsAnywhereOnTheBodyKeepTheTrack) {
+  const auto run_with = [](double few_point_stddev_m) {
+    core::TrackingConfig config;
+    config.few_point_stddev_m = few_point_stddev_m;
+    ScriptRunner run(config);
+    for (int k = 0; k < 20; ++k) run.step({{1, person_detection(at(40, 0), {})}});
+    PersonShape one_point;
+    one_point.points = 1;
+    one_point.radius_m = 0.0f;  // a single point: the detector's 3 cm floor
+    one_point.height_m = 0.0f;
+    for (int k = 0; k < 20; ++k) {
+      const double side = k % 2 == 0 ? 0.25 : -0.25;
+      auto d = person_detection(at(40, side), one_point);
+      d.centroid.z() = 1.2f;
+      run.step({{1, d}});
+    }
+    return run.single_identity(1);
+  };
+  EXPECT_TRUE(run_with(0.2));
+  EXPECT_FALSE(run_with(0.0)) << "the rule must matter: without it the track is lost";
+}
+
 TEST(Tracker, YoungerHypothesesNearOlderOnesAreDeleted) {
   ScriptRunner run;
   PersonShape legs, torso;
