@@ -17,6 +17,7 @@ constexpr int kInitialBits = 10;
 constexpr int kChunkBits = 18;  // table storage in chunks of 2^18 slots (2 MiB)
 constexpr int kMaxBits = 32;    // fingerprints give the home slots of tables up to 2^32 slots
 constexpr std::align_val_t kBlockAlign{64};
+constexpr std::size_t kSpareBytes = std::size_t{2} << 20;  // table chunks and voxel blocks
 
 std::uint64_t pack(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
   return (static_cast<std::uint64_t>(ix + kAxisOffset) << (2 * kAxisBits)) |
@@ -54,22 +55,22 @@ inline std::uint32_t slot_fp(std::uint64_t s) { return static_cast<std::uint32_t
 inline bool is_voxel(std::uint64_t s) { return (s & 0xFFFFFFFFu) != 0; }
 inline std::size_t slot_index(std::uint64_t s) { return (s & 0xFFFFFFFFu) - 1; }
 
-// Incremental resize. New voxels go to table_ at load <= 1/2. From load 0.42 on, a table twice
-// as large is prepared, kPrepareSlotsPerUnit slots per unit of insert work (a new voxel, or
-// kPointsPerUnit points inserted, whichever is more), so it is complete before table_ reaches load
-// 0.42 + 2/32 < 1/2. Then it becomes table_ (load < 1/4) and the old one drains into it,
-// kDrainSlotsPerUnit slots per unit, done before the load grows by 1/64, long before the next
-// resize starts. No call does more than a fixed multiple of its own work: the whole-table
-// rehash that used to happen in one insert (hundreds of ms at millions of voxels) is spread
-// over the scans that add the next few percent of the voxels. The cost that dominates is the
-// first touch of the new memory (page faults, 2-20 us per 4 KiB on the development VM), so the
-// rates trade the share of scans that carry resize work (about a fifth while the map grows)
-// against the work each of them does (32 slots, 256 bytes, per new voxel).
-constexpr std::size_t kPrepareSlotsPerUnit = 32;
-constexpr std::size_t kDrainSlotsPerUnit = 32;
-constexpr std::size_t kPointsPerUnit = 4;
-constexpr std::size_t kResizeLoadNum = 42;  // prepare from load 0.42 on
-constexpr std::size_t kResizeLoadDen = 100;
+// Incremental resize. New voxels go to table_ at load <= 0.7 (the fingerprints keep the longer
+// probes cheap: 8 slots per cache line, the voxel read only on a matching fingerprint). From
+// load 0.36 on, a table twice as large is prepared, kPrepareSlotsPerUnit slots per unit of insert
+// work (a new voxel, or kPointsPerUnit points inserted, whichever is more), so it is complete
+// when table_ reaches load 0.36 + 2/8 = 0.61 < 0.7. Then it becomes table_ (load 0.305) and the
+// old one drains into it, kDrainSlotsPerUnit slots per unit, done at load 0.305 + 1/32, before
+// the next resize starts. No call does more than a fixed multiple of its own work, and the work
+// is spread over most of the scans that add voxels: the cost that dominates is the first touch
+// of the new memory (page faults, 3-12 us per 4 KiB on the development VM), 64 bytes of the new
+// table per new voxel, while the voxels themselves mostly reuse the drained tables' memory.
+constexpr std::size_t kPrepareSlotsPerUnit = 8;
+constexpr std::size_t kDrainSlotsPerUnit = 16;
+constexpr std::size_t kPointsPerUnit = 32;
+constexpr std::size_t kResizeLoadNum = 36;  // prepare from load 0.36 on
+constexpr std::size_t kMaxLoadNum = 70;     // load <= 0.7
+constexpr std::size_t kLoadDen = 100;
 constexpr std::size_t kChunk = 256;  // points per batch step (keys computed, slots prefetched)
 constexpr std::size_t kPrefetch = 16;
 
@@ -78,10 +79,22 @@ constexpr std::size_t kPrefetch = 16;
 void StaticMap::RawDelete::operator()(void* p) const { ::operator delete(p, kBlockAlign); }
 
 template <class T>
-StaticMap::Block<T> StaticMap::allocate_block(std::size_t n) {
-  // Uninitialized: the memory is first written, and its pages faulted in, where it is used.
+StaticMap::Block<T> StaticMap::take_block(std::size_t n) {
+  // Uninitialized: new memory is first written, and its pages faulted in, where it is used.
   static_assert(std::is_trivially_destructible_v<T>);
+  if (n * sizeof(T) == kSpareBytes && !spares_.empty()) {
+    Block<T> block(reinterpret_cast<T*>(spares_.back().release()));
+    spares_.pop_back();
+    return block;
+  }
   return Block<T>(static_cast<T*>(::operator new(n * sizeof(T), kBlockAlign)));
+}
+
+template <class T>
+void StaticMap::give_block(Block<T> block, std::size_t n) {
+  if (n * sizeof(T) == kSpareBytes) {
+    spares_.emplace_back(reinterpret_cast<std::byte*>(block.release()));
+  }
 }
 
 StaticMap::StaticMap(double voxel_size_m)
@@ -103,16 +116,17 @@ void StaticMap::prepare_slots(Table& t, std::size_t slots) {
   const std::size_t chunk = std::size_t{1} << t.chunk_bits;
   while (t.ready < target) {
     const std::size_t c = t.ready >> t.chunk_bits;
-    if (!t.chunks[c]) t.chunks[c] = allocate_block<Slot>(chunk);
+    if (!t.chunks[c]) t.chunks[c] = take_block<Slot>(chunk);
     const std::size_t stop = std::min(target, (c + 1) * chunk);
     Slot* first = &t[t.ready];
-    std::fill(first, first + (stop - t.ready), kFree);
+    std::uninitialized_fill(first, first + (stop - t.ready), kFree);
     t.ready = stop;
   }
 }
 
 void StaticMap::clear() {
   blocks_.clear();
+  spares_.clear();
   table_ = make_table(kInitialBits);
   prepare_slots(table_, table_.size);
   old_ = Table{};
@@ -186,7 +200,9 @@ void StaticMap::drain(std::size_t slots) {
     table_[j] = s;
   }
   // Chunks wholly drained are freed now, a piece of the old table at a time.
-  for (std::size_t c = drained_ / chunk; c < end / chunk; ++c) old_.chunks[c].reset();
+  for (std::size_t c = drained_ / chunk; c < end / chunk; ++c) {
+    give_block(std::move(old_.chunks[c]), chunk);
+  }
   drained_ = end;
   if (drained_ == old_.size) {
     old_ = Table{};
@@ -209,24 +225,22 @@ void StaticMap::finish_resize() {
 }
 
 void StaticMap::make_room(std::size_t n) {
-  // The hard limit (load <= 1/2) is reached only when voxels come faster than the pacing above
+  // The hard limit (load <= 0.7) is reached only when voxels come faster than the pacing above
   // assumes (or in the first, small tables); the pending resize is then completed at once.
-  while (2 * (size_ + n) > table_.size) {
+  while (kLoadDen * (size_ + n) > kMaxLoadNum * table_.size) {
     if (phase_ == Phase::kIdle) start_resize();
     finish_resize();
   }
-  if (phase_ == Phase::kIdle && kResizeLoadDen * (size_ + n) > kResizeLoadNum * table_.size) {
+  if (phase_ == Phase::kIdle && kLoadDen * (size_ + n) > kResizeLoadNum * table_.size) {
     start_resize();
   }
 }
 
 std::size_t StaticMap::add_voxel(std::uint64_t key) {
   if ((size_ >> kBlockBits) >= blocks_.size()) {
-    blocks_.push_back(allocate_block<Voxel>(std::size_t{1} << kBlockBits));
+    blocks_.push_back(take_block<Voxel>(std::size_t{1} << kBlockBits));
   }
-  Voxel& v = voxel(size_);
-  v.key = key;
-  v.point = MapPoint{};
+  new (&voxel(size_)) Voxel{key, MapPoint{}};
   return size_++;
 }
 

@@ -122,10 +122,13 @@ class StaticMap {
   // kMoving: table_ (the new one) takes the inserts while old_ drains into it, front to back.
   enum class Phase { kIdle, kPreparing, kMoving };
 
+  // An uninitialized block of n T, a spare one when it has the size of the spares.
   template <class T>
-  static Block<T> allocate_block(std::size_t n);           // uninitialized
-  static Table make_table(int bits);                       // no chunk allocated yet
-  static void prepare_slots(Table& t, std::size_t slots);  // up to slots allocated and cleared
+  Block<T> take_block(std::size_t n);
+  template <class T>
+  void give_block(Block<T> block, std::size_t n);  // kept as a spare when it has their size
+  static Table make_table(int bits);               // no chunk allocated yet
+  void prepare_slots(Table& t, std::size_t slots);  // up to slots allocated and cleared
   [[nodiscard]] Voxel& voxel(std::size_t i) { return blocks_[i >> kBlockBits][i & kBlockMask]; }
   [[nodiscard]] const Voxel& voxel(std::size_t i) const {
     return blocks_[i >> kBlockBits][i & kBlockMask];
@@ -144,7 +147,7 @@ class StaticMap {
   void insert_batch(const std::vector<Eigen::Vector3f>& points,
                     const std::vector<float>& intensities, const std::vector<std::uint8_t>& skip,
                     const std::vector<std::uint32_t>* cells, SettledCells* settled);
-  void make_room(std::size_t n);  // table_ can take n new voxels at load <= 1/2
+  void make_room(std::size_t n);  // table_ can take n new voxels at load <= 0.7
   void start_resize();
   void advance_resize(std::size_t units);
   void prepare(std::size_t slots);
@@ -156,6 +159,9 @@ class StaticMap {
   double voxel_size_m_;
   float inverse_size_;
   std::vector<Block<Voxel>> blocks_;  // the voxels [0, size_), dense: removal moves the last
+  // 2 MiB blocks of drained tables, for the next voxels and tables: memory already written is
+  // cheap to reuse, new memory costs a page fault per 4 KiB.
+  std::vector<Block<std::byte>> spares_;
   Table table_;
   Table old_;
   Table next_;
