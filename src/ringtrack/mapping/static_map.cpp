@@ -57,18 +57,20 @@ inline std::size_t slot_index(std::uint64_t s) { return (s & 0xFFFFFFFFu) - 1; }
 
 // Incremental resize. New voxels go to table_ at load <= 0.7 (the fingerprints keep the longer
 // probes cheap: 8 slots per cache line, the voxel read only on a matching fingerprint). From
-// load 0.36 on, a table twice as large is prepared, kPrepareSlotsPerUnit slots per unit of insert
+// load 0.52 on, a table twice as large is prepared, kPrepareSlotsPerUnit slots per unit of insert
 // work (a new voxel, or kPointsPerUnit points inserted, whichever is more), so it is complete
-// when table_ reaches load 0.36 + 2/8 = 0.61 < 0.7. Then it becomes table_ (load 0.305) and the
-// old one drains into it, kDrainSlotsPerUnit slots per unit, done at load 0.305 + 1/32, before
-// the next resize starts. No call does more than a fixed multiple of its own work, and the work
-// is spread over most of the scans that add voxels: the cost that dominates is the first touch
-// of the new memory (page faults, 3-12 us per 4 KiB on the development VM), 64 bytes of the new
-// table per new voxel, while the voxels themselves mostly reuse the drained tables' memory.
-constexpr std::size_t kPrepareSlotsPerUnit = 8;
-constexpr std::size_t kDrainSlotsPerUnit = 16;
+// when table_ reaches load 0.52 + 2/20 = 0.62 < 0.7. Then it becomes table_ (load 0.31) and the
+// old one drains into it, kDrainSlotsPerUnit slots per unit, done at load 0.31 + 1/64, long
+// before the next resize starts. No call does more than a fixed multiple of its own work. The
+// cost that dominates is the first touch of the new memory (page faults, 3-17 us per 4 KiB on
+// the development VM; 160 bytes of new table per new voxel while preparing), so the rates trade
+// the share of the growing scans that carry resize work (about a third of a doubling cycle)
+// against the work each of them does: spread over every growing scan, the median scan pays it;
+// packed into a few, the tail does. The voxels themselves mostly reuse drained tables' memory.
+constexpr std::size_t kPrepareSlotsPerUnit = 20;
+constexpr std::size_t kDrainSlotsPerUnit = 32;
 constexpr std::size_t kPointsPerUnit = 32;
-constexpr std::size_t kResizeLoadNum = 36;  // prepare from load 0.36 on
+constexpr std::size_t kResizeLoadNum = 52;  // prepare from load 0.52 on
 constexpr std::size_t kMaxLoadNum = 70;     // load <= 0.7
 constexpr std::size_t kLoadDen = 100;
 constexpr std::size_t kChunk = 256;  // points per batch step (keys computed, slots prefetched)
