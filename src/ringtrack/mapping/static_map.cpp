@@ -46,14 +46,22 @@ inline bool voxel_key(const Eigen::Vector3f& p, float inverse_size, std::uint64_
 inline std::uint32_t fingerprint(std::uint64_t key) {
   return static_cast<std::uint32_t>((key * 0x9E3779B97F4A7C15ull) >> 32);
 }
-inline std::size_t home(std::uint32_t fp, int bits) { return fp >> (32 - bits); }
+inline std::size_t home(std::uint32_t fp, int bits) {
+  return fp >> (32 - bits);
+}
 
 inline std::uint64_t make_slot(std::uint32_t fp, std::size_t index) {
   return (std::uint64_t{fp} << 32) | (index + 1);
 }
-inline std::uint32_t slot_fp(std::uint64_t s) { return static_cast<std::uint32_t>(s >> 32); }
-inline bool is_voxel(std::uint64_t s) { return (s & 0xFFFFFFFFu) != 0; }
-inline std::size_t slot_index(std::uint64_t s) { return (s & 0xFFFFFFFFu) - 1; }
+inline std::uint32_t slot_fp(std::uint64_t s) {
+  return static_cast<std::uint32_t>(s >> 32);
+}
+inline bool is_voxel(std::uint64_t s) {
+  return (s & 0xFFFFFFFFu) != 0;
+}
+inline std::size_t slot_index(std::uint64_t s) {
+  return (s & 0xFFFFFFFFu) - 1;
+}
 
 // Incremental resize. New voxels go to table_ at load <= 0.7 (the fingerprints keep the longer
 // probes cheap: 8 slots per cache line, the voxel read only on a matching fingerprint). From
@@ -78,7 +86,9 @@ constexpr std::size_t kPrefetch = 16;
 
 }  // namespace
 
-void StaticMap::RawDelete::operator()(void* p) const { ::operator delete(p, kBlockAlign); }
+void StaticMap::RawDelete::operator()(void* p) const {
+  ::operator delete(p, kBlockAlign);
+}
 
 template <class T>
 StaticMap::Block<T> StaticMap::take_block(std::size_t n) {
@@ -163,8 +173,7 @@ std::size_t StaticMap::find_old(std::uint64_t key, std::uint32_t fp) const {
   // resumes at drained_ (an entry past it sits in an unbroken run from its home), and one that
   // wraps around past the last slot ends.
   const std::size_t mask = old_.size - 1;
-  for (std::size_t i = std::max(home(fp, old_.bits), drained_); i >= drained_;
-       i = (i + 1) & mask) {
+  for (std::size_t i = std::max(home(fp, old_.bits), drained_); i >= drained_; i = (i + 1) & mask) {
     if (old_[i] == kFree) break;
     if (holds(old_[i], fp, key)) return i;
   }

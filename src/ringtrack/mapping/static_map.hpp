@@ -126,8 +126,8 @@ class StaticMap {
   template <class T>
   Block<T> take_block(std::size_t n);
   template <class T>
-  void give_block(Block<T> block, std::size_t n);  // kept as a spare when it has their size
-  static Table make_table(int bits);               // no chunk allocated yet
+  void give_block(Block<T> block, std::size_t n);   // kept as a spare when it has their size
+  static Table make_table(int bits);                // no chunk allocated yet
   void prepare_slots(Table& t, std::size_t slots);  // up to slots allocated and cleared
   [[nodiscard]] Voxel& voxel(std::size_t i) { return blocks_[i >> kBlockBits][i & kBlockMask]; }
   [[nodiscard]] const Voxel& voxel(std::size_t i) const {
