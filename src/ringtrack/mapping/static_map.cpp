@@ -3,14 +3,21 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <new>
+#include <stdexcept>
+#include <type_traits>
 
 namespace ringtrack::mapping {
 namespace {
 
 constexpr int kAxisBits = 21;
 constexpr std::int64_t kAxisOffset = std::int64_t{1} << (kAxisBits - 1);
+constexpr std::uint64_t kNoKey = ~std::uint64_t{0};  // no voxel (SettledCells, last_key_)
 constexpr int kInitialBits = 10;
-constexpr int kChunkBits = 16;  // table storage in chunks of 2^16 slots (2 MiB)
+constexpr int kChunkBits = 18;  // table storage in chunks of 2^18 slots (2 MiB)
+constexpr int kMaxBits = 32;    // fingerprints give the home slots of tables up to 2^32 slots
+constexpr std::align_val_t kBlockAlign{64};
+constexpr std::size_t kSpareBytes = std::size_t{2} << 20;  // table chunks and voxel blocks
 
 std::uint64_t pack(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
   return (static_cast<std::uint64_t>(ix + kAxisOffset) << (2 * kAxisBits)) |
@@ -34,26 +41,73 @@ inline bool voxel_key(const Eigen::Vector3f& p, float inverse_size, std::uint64_
   return true;
 }
 
-// Incremental resize. New voxels go to table_ at load <= 1/2. From load 0.42 on, a table twice
-// as large is allocated, kPrepareSlotsPerUnit slots per unit of insert work (a new voxel, or
-// kPointsPerUnit points inserted, whichever is more), so it is complete before table_ reaches load
-// 0.42 + 2/32 < 1/2. Then it becomes table_ (load < 1/4) and the old one drains into it,
-// kDrainSlotsPerUnit slots per unit, done before the load grows by 1/64, long before the next
-// resize starts. No call does more than a fixed multiple of its own work: the whole-table
-// rehash that used to happen in one insert (hundreds of ms at millions of voxels) is spread
-// over the scans that add the next few percent of the voxels. The cost that dominates is the
-// first touch of the new memory (page faults, ~2 us per 4 KiB on the development VM), so the
-// rates trade the share of scans that carry resize work (about a fifth while the map grows)
-// against the work each of them does (32 slots, 1 KiB, per new voxel).
-constexpr std::size_t kPrepareSlotsPerUnit = 32;
+// Fibonacci hashing: the top bits of the product mix all three packed axes. Its top 32 bits are
+// the fingerprint a slot keeps, and the top bits of those the home slot in a table of 2^bits.
+inline std::uint32_t fingerprint(std::uint64_t key) {
+  return static_cast<std::uint32_t>((key * 0x9E3779B97F4A7C15ull) >> 32);
+}
+inline std::size_t home(std::uint32_t fp, int bits) {
+  return fp >> (32 - bits);
+}
+
+inline std::uint64_t make_slot(std::uint32_t fp, std::size_t index) {
+  return (std::uint64_t{fp} << 32) | (index + 1);
+}
+inline std::uint32_t slot_fp(std::uint64_t s) {
+  return static_cast<std::uint32_t>(s >> 32);
+}
+inline bool is_voxel(std::uint64_t s) {
+  return (s & 0xFFFFFFFFu) != 0;
+}
+inline std::size_t slot_index(std::uint64_t s) {
+  return (s & 0xFFFFFFFFu) - 1;
+}
+
+// Incremental resize. New voxels go to table_ at load <= 0.7 (the fingerprints keep the longer
+// probes cheap: 8 slots per cache line, the voxel read only on a matching fingerprint). From
+// load 0.52 on, a table twice as large is prepared, kPrepareSlotsPerUnit slots per unit of insert
+// work (a new voxel, or kPointsPerUnit points inserted, whichever is more), so it is complete
+// when table_ reaches load 0.52 + 2/20 = 0.62 < 0.7. Then it becomes table_ (load 0.31) and the
+// old one drains into it, kDrainSlotsPerUnit slots per unit, done at load 0.31 + 1/64, long
+// before the next resize starts. No call does more than a fixed multiple of its own work. The
+// cost that dominates is the first touch of the new memory (page faults, 3-17 us per 4 KiB on
+// the development VM; 160 bytes of new table per new voxel while preparing), so the rates trade
+// the share of the growing scans that carry resize work (about a third of a doubling cycle)
+// against the work each of them does: spread over every growing scan, the median scan pays it;
+// packed into a few, the tail does. The voxels themselves mostly reuse drained tables' memory.
+constexpr std::size_t kPrepareSlotsPerUnit = 20;
 constexpr std::size_t kDrainSlotsPerUnit = 32;
-constexpr std::size_t kPointsPerUnit = 4;
-constexpr std::size_t kResizeLoadNum = 42;  // prepare from load 0.42 on
-constexpr std::size_t kResizeLoadDen = 100;
+constexpr std::size_t kPointsPerUnit = 32;
+constexpr std::size_t kResizeLoadNum = 52;  // prepare from load 0.52 on
+constexpr std::size_t kMaxLoadNum = 70;     // load <= 0.7
+constexpr std::size_t kLoadDen = 100;
 constexpr std::size_t kChunk = 256;  // points per batch step (keys computed, slots prefetched)
 constexpr std::size_t kPrefetch = 16;
 
 }  // namespace
+
+void StaticMap::RawDelete::operator()(void* p) const {
+  ::operator delete(p, kBlockAlign);
+}
+
+template <class T>
+StaticMap::Block<T> StaticMap::take_block(std::size_t n) {
+  // Uninitialized: new memory is first written, and its pages faulted in, where it is used.
+  static_assert(std::is_trivially_destructible_v<T>);
+  if (n * sizeof(T) == kSpareBytes && !spares_.empty()) {
+    Block<T> block(reinterpret_cast<T*>(spares_.back().release()));
+    spares_.pop_back();
+    return block;
+  }
+  return Block<T>(static_cast<T*>(::operator new(n * sizeof(T), kBlockAlign)));
+}
+
+template <class T>
+void StaticMap::give_block(Block<T> block, std::size_t n) {
+  if (n * sizeof(T) == kSpareBytes) {
+    spares_.emplace_back(reinterpret_cast<std::byte*>(block.release()));
+  }
+}
 
 StaticMap::StaticMap(double voxel_size_m)
     : voxel_size_m_(voxel_size_m), inverse_size_(static_cast<float>(1.0 / voxel_size_m)) {
@@ -69,100 +123,97 @@ StaticMap::Table StaticMap::make_table(int bits) {
   return t;
 }
 
-void StaticMap::allocate_chunks(Table& t, std::size_t slots) {
-  t.ready = std::min(t.size, slots);
+void StaticMap::prepare_slots(Table& t, std::size_t slots) {
+  const std::size_t target = std::min(t.size, slots);
   const std::size_t chunk = std::size_t{1} << t.chunk_bits;
-  const std::size_t needed = (t.ready + chunk - 1) / chunk;
-  for (std::size_t c = 0; c < needed; ++c) {
-    if (!t.chunks[c]) t.chunks[c] = std::make_unique<Slot[]>(chunk);  // all kEmpty
+  while (t.ready < target) {
+    const std::size_t c = t.ready >> t.chunk_bits;
+    if (!t.chunks[c]) t.chunks[c] = take_block<Slot>(chunk);
+    const std::size_t stop = std::min(target, (c + 1) * chunk);
+    Slot* first = &t[t.ready];
+    std::uninitialized_fill(first, first + (stop - t.ready), kFree);
+    t.ready = stop;
   }
 }
 
 void StaticMap::clear() {
+  blocks_.clear();
+  spares_.clear();
   table_ = make_table(kInitialBits);
-  allocate_chunks(table_, table_.size);
+  prepare_slots(table_, table_.size);
   old_ = Table{};
   next_ = Table{};
   phase_ = Phase::kIdle;
   drained_ = 0;
   size_ = 0;
-  last_key_ = kEmpty;
+  last_key_ = kNoKey;
   ++generation_;
 }
 
-std::size_t StaticMap::home(std::uint64_t key, int bits) {
-  // Fibonacci hashing: the top bits of the product mix all three packed axes.
-  return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> (64 - bits));
+bool StaticMap::holds(Slot s, std::uint32_t fp, std::uint64_t key) const {
+  return slot_fp(s) == fp && is_voxel(s) && voxel(slot_index(s)).key == key;
 }
 
 std::size_t StaticMap::find(std::uint64_t key) const {
+  const std::uint32_t fp = fingerprint(key);
   const std::size_t mask = table_.size - 1;
-  for (std::size_t i = home(key, table_.bits);; i = (i + 1) & mask) {
-    if (table_[i].key == key) return i;
-    if (table_[i].key == kEmpty) return table_.size;
+  for (std::size_t i = home(fp, table_.bits);; i = (i + 1) & mask) {
+    if (table_[i] == kFree) return table_.size;
+    if (holds(table_[i], fp, key)) return i;
   }
 }
 
 std::size_t StaticMap::find_old(std::uint64_t key) const {
   if (phase_ != Phase::kMoving) return old_.size;
-  return find_old(key, home(key, old_.bits));
+  return find_old(key, fingerprint(key));
 }
 
-std::size_t StaticMap::find_old(std::uint64_t key, std::size_t old_home) const {
-  // Slots below drained_ count as empty (their chunks are freed): a probe whose home lies there
+std::size_t StaticMap::find_old(std::uint64_t key, std::uint32_t fp) const {
+  // Slots below drained_ count as free (their chunks are freed): a probe whose home lies there
   // resumes at drained_ (an entry past it sits in an unbroken run from its home), and one that
   // wraps around past the last slot ends.
   const std::size_t mask = old_.size - 1;
-  for (std::size_t i = std::max(old_home, drained_); i >= drained_; i = (i + 1) & mask) {
-    if (old_[i].key == key) return i;
-    if (old_[i].key == kEmpty) break;
+  for (std::size_t i = std::max(home(fp, old_.bits), drained_); i >= drained_; i = (i + 1) & mask) {
+    if (old_[i] == kFree) break;
+    if (holds(old_[i], fp, key)) return i;
   }
   return old_.size;
 }
 
 void StaticMap::start_resize() {
+  if (table_.bits >= kMaxBits) throw std::length_error("mapping: static map full (2^31 voxels)");
   next_ = make_table(table_.bits + 1);
   phase_ = Phase::kPreparing;
 }
 
 void StaticMap::prepare(std::size_t slots) {
-  allocate_chunks(next_, next_.ready + slots);
+  prepare_slots(next_, next_.ready + slots);
   if (next_.ready < next_.size) return;
   old_ = std::move(table_);
   table_ = std::move(next_);
   next_ = Table{};
   phase_ = Phase::kMoving;
   drained_ = 0;
-  last_key_ = kEmpty;
 }
 
 void StaticMap::drain(std::size_t slots) {
+  // Only slots move (the voxels stay where they are in the dense array), each to its home in
+  // the doubled table, about twice its old position: the writes stream front to back too.
   const std::size_t end = std::min(old_.size, drained_ + slots);
-  last_key_ = kEmpty;  // its point may move
   const std::size_t mask = table_.size - 1;
   const std::size_t chunk = std::size_t{1} << old_.chunk_bits;
-  // Blocks of old slots: the new homes of a block's voxels are fetched before they are stored.
-  constexpr std::size_t kBlock = 64;
-  std::size_t homes[kBlock] = {};
-  for (std::size_t begin = drained_; begin < end; begin += kBlock) {
-    const std::size_t stop = std::min(end, begin + kBlock);
-    for (std::size_t i = begin; i < stop; ++i) {
-      const std::uint64_t key = old_[i].key;
-      if (!is_key(key)) continue;
-      homes[i - begin] = home(key, table_.bits);
-      __builtin_prefetch(&table_[homes[i - begin]]);
-    }
-    for (std::size_t i = begin; i < stop; ++i) {
-      const Slot& s = old_[i];
-      if (!is_key(s.key)) continue;
-      // Not in table_: a voxel lives in one table only.
-      std::size_t j = homes[i - begin];
-      while (table_[j].key != kEmpty) j = (j + 1) & mask;
-      table_[j] = s;
-    }
+  for (std::size_t i = drained_; i < end; ++i) {
+    const Slot s = old_[i];
+    if (!is_voxel(s)) continue;
+    // Not in table_: a voxel has one slot.
+    std::size_t j = home(slot_fp(s), table_.bits);
+    while (table_[j] != kFree) j = (j + 1) & mask;
+    table_[j] = s;
   }
   // Chunks wholly drained are freed now, a piece of the old table at a time.
-  for (std::size_t c = drained_ / chunk; c < end / chunk; ++c) old_.chunks[c].reset();
+  for (std::size_t c = drained_ / chunk; c < end / chunk; ++c) {
+    give_block(std::move(old_.chunks[c]), chunk);
+  }
   drained_ = end;
   if (drained_ == old_.size) {
     old_ = Table{};
@@ -185,40 +236,43 @@ void StaticMap::finish_resize() {
 }
 
 void StaticMap::make_room(std::size_t n) {
-  // The hard limit (load <= 1/2) is reached only when voxels come faster than the pacing above
+  // The hard limit (load <= 0.7) is reached only when voxels come faster than the pacing above
   // assumes (or in the first, small tables); the pending resize is then completed at once.
-  while (2 * (size_ + n) > table_.size) {
+  while (kLoadDen * (size_ + n) > kMaxLoadNum * table_.size) {
     if (phase_ == Phase::kIdle) start_resize();
     finish_resize();
   }
-  if (phase_ == Phase::kIdle && kResizeLoadDen * (size_ + n) > kResizeLoadNum * table_.size) {
+  if (phase_ == Phase::kIdle && kLoadDen * (size_ + n) > kResizeLoadNum * table_.size) {
     start_resize();
   }
 }
 
-std::size_t StaticMap::find_or_claim(std::uint64_t key, std::size_t start) {
-  const std::size_t mask = table_.size - 1;
-  std::size_t i = start;
-  while (table_[i].key != key) {
-    if (table_[i].key == kEmpty) {
-      table_[i].key = key;
-      table_[i].point = MapPoint{};
-      ++size_;
-      break;
-    }
-    i = (i + 1) & mask;
+std::size_t StaticMap::add_voxel(std::uint64_t key) {
+  if ((size_ >> kBlockBits) >= blocks_.size()) {
+    blocks_.push_back(take_block<Voxel>(std::size_t{1} << kBlockBits));
   }
-  return i;
+  new (&voxel(size_)) Voxel{key, MapPoint{}};
+  return size_++;
 }
 
-MapPoint& StaticMap::locate(std::uint64_t key, std::size_t home, std::size_t old_home) {
-  // While the old table drains, a voxel not drained yet is updated where it is (one lookup in
-  // one table, not a move per access); the drain moves it later. New voxels go to table_ only.
+MapPoint& StaticMap::locate(std::uint64_t key, std::uint32_t fp) {
+  // While the old table drains, a voxel whose slot is not drained yet is found there (one lookup
+  // in one table, not a move per access); the drain moves the slot later. New voxels get a slot
+  // in table_ only.
   if (phase_ == Phase::kMoving) {
-    const std::size_t o = find_old(key, old_home);
-    if (o < old_.size) return old_[o].point;
+    const std::size_t o = find_old(key, fp);
+    if (o < old_.size) return voxel(slot_index(old_[o])).point;
   }
-  return table_[find_or_claim(key, home)].point;
+  const std::size_t mask = table_.size - 1;
+  for (std::size_t i = home(fp, table_.bits);; i = (i + 1) & mask) {
+    const Slot s = table_[i];
+    if (s == kFree) {
+      const std::size_t index = add_voxel(key);
+      table_[i] = make_slot(fp, index);
+      return voxel(index).point;
+    }
+    if (holds(s, fp, key)) return voxel(slot_index(s)).point;
+  }
 }
 
 void StaticMap::accumulate(MapPoint& m, const Eigen::Vector3f& p, float intensity) {
@@ -241,11 +295,10 @@ void StaticMap::insert(const Eigen::Vector3f& p, float intensity) {
   }
   make_room(1);
   const std::size_t before = size_;
-  last_point_ =
-      &locate(key, home(key, table_.bits), phase_ == Phase::kMoving ? home(key, old_.bits) : 0);
+  last_point_ = &locate(key, fingerprint(key));
   last_key_ = key;
   accumulate(*last_point_, p, intensity);
-  advance_resize(1 + size_ - before);  // may move voxels (and forget last_key_)
+  advance_resize(1 + size_ - before);
 }
 
 void StaticMap::insert(const std::vector<Eigen::Vector3f>& points,
@@ -261,7 +314,7 @@ void StaticMap::insert(const std::vector<Eigen::Vector3f>& points,
   for (const auto c : cells) max_cell = std::max(max_cell, c);
   if (settled.generation != generation_ || settled.key.size() <= max_cell) {
     settled.key.assign(std::max<std::size_t>(settled.key.size(), std::size_t{max_cell} + 1),
-                       kEmpty);
+                       kNoKey);
     settled.generation = generation_;
   }
   insert_batch(points, intensities, skip, &cells, &settled);
@@ -271,12 +324,16 @@ void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
                              const std::vector<float>& intensities,
                              const std::vector<std::uint8_t>& skip,
                              const std::vector<std::uint32_t>* cells, SettledCells* settled) {
-  // Chunks: room for a whole chunk is made first, so slots do not move inside one, and the
-  // home slot of the point kPrefetch ahead is fetched while the current one is stored.
+  // Chunks: room for a whole chunk is made first, so the tables do not change inside one. The
+  // home slot of the point kPrefetch ahead is fetched while the current one is stored, and the
+  // voxel named by the home slot of the point kPrefetch / 2 ahead (the slot has arrived by then)
+  // when its fingerprint matches.
   std::uint64_t keys[kChunk];
+  std::uint32_t fps[kChunk];
   std::size_t homes[kChunk];
   std::size_t old_homes[kChunk];
   std::uint32_t which[kChunk];
+  constexpr std::size_t kHalf = kPrefetch / 2;
   for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
     const std::size_t end = std::min(points.size(), begin + kChunk);
     std::size_t n = 0;
@@ -294,26 +351,36 @@ void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
     const std::size_t before = size_;
     const bool moving = phase_ == Phase::kMoving;
     for (std::size_t k = 0; k < n; ++k) {
-      homes[k] = home(keys[k], table_.bits);
-      old_homes[k] = moving ? home(keys[k], old_.bits) : 0;
+      fps[k] = fingerprint(keys[k]);
+      homes[k] = home(fps[k], table_.bits);
+      old_homes[k] = moving ? home(fps[k], old_.bits) : 0;
     }
     // While the old table drains, a voxel whose home there is not drained yet is most likely
     // still there (and a new one goes to table_): fetch both.
-    // (Written out: with these two prefetches in a lambda, g++ 12 dropped all of them.)
+    // (Written out: with these prefetches in a lambda, g++ 12 dropped all of them.)
     for (std::size_t k = 0; k < n + kPrefetch; ++k) {
       if (k < n) {
         __builtin_prefetch(&table_[homes[k]]);
         if (moving && old_homes[k] >= drained_) __builtin_prefetch(&old_[old_homes[k]]);
       }
+      if (k >= kHalf && k - kHalf < n) {
+        const std::size_t m = k - kHalf;
+        const Slot s = table_[homes[m]];
+        if (slot_fp(s) == fps[m] && is_voxel(s)) __builtin_prefetch(&voxel(slot_index(s)));
+        if (moving && old_homes[m] >= drained_) {
+          const Slot o = old_[old_homes[m]];
+          if (slot_fp(o) == fps[m] && is_voxel(o)) __builtin_prefetch(&voxel(slot_index(o)));
+        }
+      }
       if (k < kPrefetch) continue;
       const std::size_t j = k - kPrefetch;  // the point stored now
       if (keys[j] != last_key_) {
-        last_point_ = &locate(keys[j], homes[j], old_homes[j]);
+        last_point_ = &locate(keys[j], fps[j]);
         last_key_ = keys[j];
       }
       accumulate(*last_point_, points[which[j]], intensities[which[j]]);
       if (settled != nullptr) {
-        settled->key[(*cells)[which[j]]] = last_point_->count >= kSettledCount ? keys[j] : kEmpty;
+        settled->key[(*cells)[which[j]]] = last_point_->count >= kSettledCount ? keys[j] : kNoKey;
       }
     }
     advance_resize(std::max(size_ - before, (end - begin) / kPointsPerUnit));
@@ -324,8 +391,8 @@ void StaticMap::erase_slot(std::size_t i) {
   // Backward-shift deletion keeps every probe sequence unbroken without tombstones.
   const std::size_t mask = table_.size - 1;
   std::size_t hole = i;
-  for (std::size_t j = (i + 1) & mask; table_[j].key != kEmpty; j = (j + 1) & mask) {
-    const std::size_t h = home(table_[j].key, table_.bits);
+  for (std::size_t j = (i + 1) & mask; table_[j] != kFree; j = (j + 1) & mask) {
+    const std::size_t h = home(slot_fp(table_[j]), table_.bits);
     // Entry j may move into the hole when its home is not cyclically within (hole, j].
     const bool stays = hole <= j ? (hole < h && h <= j) : (hole < h || h <= j);
     if (!stays) {
@@ -333,19 +400,30 @@ void StaticMap::erase_slot(std::size_t i) {
       hole = j;
     }
   }
-  table_[hole] = Slot{};
+  table_[hole] = kFree;
 }
 
 void StaticMap::erase(std::uint64_t key) {
-  const std::size_t i = find(key);
-  if (i < table_.size) {
+  std::size_t index = 0;
+  if (const std::size_t i = find(key); i < table_.size) {
+    index = slot_index(table_[i]);
     erase_slot(i);
   } else {
     // Still in the draining table: a tombstone keeps the probes past it unbroken.
-    old_[find_old(key)].key = kGone;
+    const std::size_t o = find_old(key);
+    index = slot_index(old_[o]);
+    old_[o] = kGone;
   }
   --size_;
-  last_key_ = kEmpty;
+  if (index != size_) {
+    // The array stays dense: the last voxel moves into the hole and its slot follows.
+    const std::uint64_t moved = voxel(size_).key;
+    const std::size_t i = find(moved);
+    Slot& s = i < table_.size ? table_[i] : old_[find_old(moved)];
+    s = make_slot(slot_fp(s), index);
+    voxel(index) = voxel(size_);
+  }
+  last_key_ = kNoKey;
   ++generation_;
 }
 
@@ -361,24 +439,31 @@ std::size_t StaticMap::remove_inside(const core::Box3& box) {
                             (hi.array().abs() < static_cast<float>(kAxisOffset)).all();
   if (finite_range && cells <= static_cast<double>(table_.size)) {
     // Small box: look up the voxels it covers, a chunk of keys at a time with the home slots
-    // fetched ahead (a box of 10^5 voxels costs 10^5 lookups, mostly misses in a large table).
+    // fetched ahead (a box of 10^5 voxels costs 10^5 lookups, mostly misses in a large table,
+    // decided by the fingerprints alone).
     std::uint64_t keys[kChunk];
+    std::uint32_t fps[kChunk];
     std::size_t homes[kChunk];
     std::size_t n = 0;
     const auto lookup = [&] {
-      for (std::size_t k = 0; k < n; ++k) homes[k] = home(keys[k], table_.bits);
+      for (std::size_t k = 0; k < n; ++k) {
+        fps[k] = fingerprint(keys[k]);
+        homes[k] = home(fps[k], table_.bits);
+      }
       for (std::size_t k = 0; k < std::min(n, kPrefetch); ++k)
         __builtin_prefetch(&table_[homes[k]]);
       const std::size_t mask = table_.size - 1;
       for (std::size_t k = 0; k < n; ++k) {
         if (k + kPrefetch < n) __builtin_prefetch(&table_[homes[k + kPrefetch]]);
         std::size_t i = homes[k];
-        while (table_[i].key != keys[k] && table_[i].key != kEmpty) i = (i + 1) & mask;
+        while (table_[i] != kFree && !holds(table_[i], fps[k], keys[k])) i = (i + 1) & mask;
         const MapPoint* p = nullptr;
-        if (table_[i].key == keys[k]) {
-          p = &table_[i].point;
-        } else if (const std::size_t o = find_old(keys[k]); o < old_.size) {
-          p = &old_[o].point;
+        if (table_[i] != kFree) {
+          p = &voxel(slot_index(table_[i])).point;
+        } else if (phase_ == Phase::kMoving) {
+          if (const std::size_t o = find_old(keys[k], fps[k]); o < old_.size) {
+            p = &voxel(slot_index(old_[o])).point;
+          }
         }
         if (p != nullptr && box.contains(p->position)) doomed.push_back(keys[k]);
       }
@@ -397,11 +482,9 @@ std::size_t StaticMap::remove_inside(const core::Box3& box) {
     }
     lookup();
   } else {
-    const auto check = [&](const Slot& s) {
-      if (is_key(s.key) && box.contains(s.point.position)) doomed.push_back(s.key);
-    };
-    for (std::size_t i = 0; i < table_.size; ++i) check(table_[i]);
-    for (std::size_t i = drained_; i < old_.size; ++i) check(old_[i]);
+    for (std::size_t i = 0; i < size_; ++i) {
+      if (box.contains(voxel(i).point.position)) doomed.push_back(voxel(i).key);
+    }
   }
   for (const auto key : doomed) erase(key);
   return doomed.size();
@@ -410,11 +493,7 @@ std::size_t StaticMap::remove_inside(const core::Box3& box) {
 std::vector<MapPoint> StaticMap::points() const {
   std::vector<std::pair<std::uint64_t, MapPoint>> keyed;
   keyed.reserve(size_);
-  const auto take = [&](const Slot& s) {
-    if (is_key(s.key)) keyed.emplace_back(s.key, s.point);
-  };
-  for (std::size_t i = 0; i < table_.size; ++i) take(table_[i]);
-  for (std::size_t i = drained_; i < old_.size; ++i) take(old_[i]);
+  for (std::size_t i = 0; i < size_; ++i) keyed.emplace_back(voxel(i).key, voxel(i).point);
   std::sort(keyed.begin(), keyed.end(),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   std::vector<MapPoint> out;
