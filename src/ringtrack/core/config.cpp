@@ -264,6 +264,10 @@ class Schema {
            "association: a detection of one or two points (a far person's sparse or relaxed "
            "cluster may be any part of the body) has at least this horizontal standard deviation "
            "(m)");
+    number("reassociate_distance_m", t.reassociate_distance_m, 0.0, 100.0,
+           "after the gated assignment, hypotheses and detections it left unpaired are paired "
+           "greedily when this close horizontally (m): the Bhattacharyya gate also compares "
+           "spreads and rejected a coasted track's own one-point detections; 0 disables");
     number("delete_eigenvalue_m2", t.delete_eigenvalue_m2, 1e-6, 1e6,
            "a hypothesis is deleted once an eigenvalue of its position covariance exceeds this "
            "(m^2); docs/tracking.md converts it to missed scans");

@@ -89,6 +89,7 @@ struct TrackingConfig {
   double measurement_covariance_scale{0.5};  // detection covariance times this: association R
   double centroid_noise_m{0.05};   // filter update noise: centroid standard error (+) this per axis
   double few_point_stddev_m{0.2};  // association: horizontal std floor of 1-2-point detections
+  double reassociate_distance_m{0.5};  // second pass: leftovers this close (horizontally) pair
   double delete_eigenvalue_m2{1.0};    // delete when a position-covariance eigenvalue exceeds this
   double merge_distance_m{0.3};        // younger hypotheses this close to older ones are deleted
   double min_speed_kmh{1.0};           // reported speeds up to this are reported as zero

@@ -211,6 +211,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
   }
   predict_all(dt);
   assign(detections);
+  reassociate(detections);
   detection_used_.assign(detections.size(), 0);
   for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
     const int d = col_of_row_[i];
@@ -277,6 +278,40 @@ void Tracker::assign(const std::vector<core::Detection>& detections) {
     }
   }
   col_of_row_ = solve_gated_assignment(cost_, g);
+}
+
+void Tracker::reassociate(const std::vector<core::Detection>& detections) {
+  // The Bhattacharyya distance also compares the two spreads: a hypothesis that coasted a few
+  // scans (wide covariance) and a one-point detection (tight) are far apart even when their
+  // means coincide, and the detection started a new track beside the old one (an identity
+  // switch). A second, greedy pass pairs what the gate left over by horizontal distance.
+  if (config_.reassociate_distance_m <= 0.0 || detections.empty()) return;
+  std::vector<char> taken(detections.size(), 0);
+  for (const int c : col_of_row_) {
+    if (c != kUnassigned) taken[static_cast<std::size_t>(c)] = 1;
+  }
+  struct Pair {
+    double distance;
+    std::size_t row, col;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
+    if (col_of_row_[i] != kUnassigned) continue;
+    const Eigen::Vector2d at = hypotheses_[i].position().head<2>();
+    for (std::size_t j = 0; j < detections.size(); ++j) {
+      if (taken[j]) continue;
+      const double d = (detections[j].centroid.cast<double>().head<2>() - at).norm();
+      if (d <= config_.reassociate_distance_m) pairs.push_back({d, i, j});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    return a.distance < b.distance || (a.distance == b.distance && a.row < b.row);
+  });
+  for (const Pair& p : pairs) {
+    if (col_of_row_[p.row] != kUnassigned || taken[p.col]) continue;
+    col_of_row_[p.row] = static_cast<int>(p.col);
+    taken[p.col] = 1;
+  }
 }
 
 void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {

@@ -119,6 +119,7 @@ class Tracker {
  private:
   void predict_all(double dt_s);
   void assign(const std::vector<core::Detection>& detections);
+  void reassociate(const std::vector<core::Detection>& detections);
   void correct(Hypothesis& h, const core::Detection& d, int index);
   void coast(Hypothesis& h);
   void create(const core::Detection& d, int index);

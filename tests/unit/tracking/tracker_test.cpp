@@ -369,6 +369,7 @@ TEST(Tracker, OnePointDetectionsAnywhereOnTheBodyKeepTheTrack) {
   const auto run_with = [](double few_point_stddev_m) {
     core::TrackingConfig config;
     config.few_point_stddev_m = few_point_stddev_m;
+    config.reassociate_distance_m = 0.0;  // the gate alone decides here
     ScriptRunner run(config);
     for (int k = 0; k < 20; ++k) run.step({{1, person_detection(at(40, 0), {})}});
     PersonShape one_point;
@@ -385,6 +386,30 @@ TEST(Tracker, OnePointDetectionsAnywhereOnTheBodyKeepTheTrack) {
   };
   EXPECT_TRUE(run_with(0.2));
   EXPECT_FALSE(run_with(0.0)) << "the rule must matter: without it the track is lost";
+}
+
+// A person tracked every scan (a tight covariance), then a single beam hits the far edge of
+// them, 0.55 m from the prediction: the gate, which compares the spreads as well as the means,
+// rejects the pair (measured: it accepts up to 0.5 m here); the second pass pairs it by
+// horizontal distance when reassociate_distance_m allows, instead of starting a new track.
+TEST(Tracker, LeftoverDetectionNearATrackIsReassociated) {
+  const auto same_track = [](double reassociate_m) {
+    core::TrackingConfig config;
+    config.reassociate_distance_m = reassociate_m;
+    ScriptRunner run(config);
+    for (int k = 0; k < 30; ++k) run.step({{1, person_detection(at(40, 0.1 * k), {})}});
+    PersonShape one_point;
+    one_point.points = 1;
+    one_point.radius_m = 0.0f;
+    one_point.height_m = 0.0f;
+    auto d = person_detection(at(40.55, 3.0), one_point);
+    d.centroid.z() = 1.2f;
+    run.step({{1, d}});
+    return run.single_identity(1);
+  };
+  EXPECT_FALSE(same_track(0.0)) << "the gate alone must reject it, or the test shows nothing";
+  EXPECT_TRUE(same_track(0.6));
+  EXPECT_FALSE(same_track(0.5)) << "farther than the distance: a new track";
 }
 
 TEST(Tracker, YoungerHypothesesNearOlderOnesAreDeleted) {
