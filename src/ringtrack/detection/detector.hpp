@@ -23,8 +23,8 @@ inline constexpr std::uint8_t kSegmentLabel = 1;
 /// too_high, too_tall, too_wide, too_short.
 struct DetectorStats {
   std::size_t segment_points{0};  ///< valid cells labelled kSegmentLabel
-  std::size_t clusters{0};        ///< clusters with at least min_cluster_points points (each
-                                  ///< part of a split cluster counts)
+  std::size_t clusters{0};        ///< clusters with at least min_cluster_points points, or
+                                  ///< fewer but new to the scene (each part of a split counts)
   std::size_t splits{0};          ///< cuts made by the split step (each adds one cluster)
   std::size_t too_small{0};       ///< clusters dropped for having fewer points
   std::size_t too_high{0};        ///< lowest point above max_altitude_m
@@ -72,8 +72,8 @@ inline constexpr std::size_t kSubBins = 4;
 /// height and with relaxed_max_diagonal_m; it is flagged relaxed. Clusters with fewer than
 /// min_cluster_points but at least relaxed_min_cluster_points points can be accepted this way.
 ///
-/// Sparse detections: given a scene memory (core::SceneMemory: the background range model of a
-/// resting sensor, or the last scans of a moving one), a cluster with fewer than
+/// Sparse detections: given a scene memory (core::SceneMemory; the pipeline passes the
+/// background range model of a resting sensor), a cluster with fewer than
 /// min_cluster_points but at least sparse_min_points points, every one of them at least
 /// background_margin_m in front of what earlier scans saw through its space, is tested with the
 /// strict model and flagged sparse (a far person hit by one or two beams where the scene was
@@ -90,9 +90,9 @@ class Detector {
   /// segment point; invalid cells are ignored whatever their label); sensor_pose maps the
   /// sensor frame to the world; predicted_positions_world are the tracker's predictions that
   /// enable the relaxed model; memory (optional) says where earlier scans saw free space, which
-  /// enables sparse detections. Detections come in order of their
-  /// smallest grid index, each with its grid indices ascending. The returned reference stays valid
-  /// until the next call. Throws core::InputError when the labels do not match the scan's size.
+  /// enables sparse detections. Detections come in order of their smallest grid index, each
+  /// with its grid indices ascending. The returned reference stays valid until the next call.
+  /// Throws core::InputError when the labels do not match the scan's size.
   const std::vector<core::Detection>& detect(
       const core::OrganizedScan& scan, const std::vector<std::uint8_t>& segment_labels,
       const core::Pose& sensor_pose,

@@ -48,7 +48,9 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   // the background learned from the earlier scans of a resting sensor lets it keep clusters too
   // small for the object model when they stand where the scene was seen free.
   const auto predictions = tracker_.predicted_positions(scan.stamp_ns);
-  const bool resting = track_rest(pose);
+  // (Nothing is learned when sparse detections are switched off: nothing would use it.)
+  const bool sparse_on = config_.detection.sparse_min_points < config_.detection.min_cluster_points;
+  const bool resting = sparse_on && track_rest(pose);
   // A moving sensor has no such memory yet: what earlier scans saw from other viewpoints says
   // little about single far points (docs/BENCHMARK.md, issue 10).
   const core::SceneMemory* memory = resting && background_.scans() > 0 ? &background_ : nullptr;

@@ -30,10 +30,11 @@ sim::Scenario far_walker() {
 }
 
 struct Outcome {
-  int scans_with_hits = 0;  // after the first 4 s (learning, confirmation)
-  int few_hit_scans = 0;    // ... of which the walker had at most two hit points
-  int tracked = 0;          // a reported dynamic hypothesis within 0.5 m of the truth
-  std::size_t sparse = 0;   // sparse detections over the run
+  int scans_with_hits = 0;            // after the first 4 s (learning, confirmation)
+  int few_hit_scans = 0;              // ... of which the walker had at most two hit points
+  int tracked = 0;                    // a reported dynamic hypothesis within 0.5 m of the truth
+  std::size_t sparse = 0;             // sparse detections over the run
+  std::int64_t background_scans = 0;  // scans the background model learned from
 };
 
 Outcome run(const sim::Scenario& scenario, const core::Config& config) {
@@ -59,6 +60,7 @@ Outcome run(const sim::Scenario& scenario, const core::Config& config) {
       }
     }
   }
+  out.background_scans = pipeline.background().scans();
   return out;
 }
 
@@ -74,6 +76,7 @@ TEST(PipelineSparse, FarPersonHitByOneBeamIsTrackedOnceTheBackgroundIsLearned) {
   EXPECT_GT(with.tracked * 10, with.scans_with_hits * 7)
       << with.tracked << " of " << with.scans_with_hits;
   EXPECT_EQ(without.sparse, 0u);
+  EXPECT_EQ(without.background_scans, 0) << "nothing is learned when nothing would use it";
   EXPECT_LT(without.tracked * 10, without.scans_with_hits * 2)
       << without.tracked << " of " << without.scans_with_hits;
 }
