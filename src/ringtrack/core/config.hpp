@@ -94,7 +94,7 @@ struct TrackingConfig {
   double merge_distance_m{0.3};        // younger hypotheses this close to older ones are deleted
   double min_speed_kmh{1.0};           // reported speeds up to this are reported as zero
   double max_speed_kmh{15.0};          // speeds are capped here (state and report)
-  double dynamic_min_distance_m{1.0};  // besides disjoint footprints, the centre must move this far
+  double dynamic_min_distance_m{1.5};  // besides disjoint footprints, the centre must move this far
   int dynamic_confirm_scans{5};        // ... in this many consecutive strict detections
   int rest_scans_to_static{30};  // dynamic hypotheses at rest this long turn static (0 = never)
   DynamicTest dynamic_test{DynamicTest::kFreeSpace};  // free_space needs the scan (Pipeline)

@@ -294,28 +294,40 @@ TEST(Tracker, StaticWhenOnlyTheHeightRangeOfThePartialViewChanges) {
   EXPECT_FALSE(run.tracker.hypotheses().front().dynamic);
 }
 
-TEST(Tracker, WalkingPersonTurnsDynamicWithinOneSecondOfLeavingItsBox) {
-  ScriptRunner run({}, 9);
-  std::mt19937_64 noise(9);
-  const PersonShape shape = noisy(0.03f, 0.02f);
-  int left_at = -1, dynamic_at = -1;
-  core::Box3 initial;
-  for (int k = 0; k < 60; ++k) {
-    const double x = k < 10 ? 0.0 : 1.0 * (k - 10) * kDt;  // stands 1 s, then walks at 1 m/s
-    const auto& hs = run.step({{0, person_detection(at(x, 5.0), shape, &noise)}});
-    ASSERT_EQ(hs.size(), 1u);
-    const core::Box3 truth = person_detection(at(x, 5.0), shape).box;
-    if (k == 0) initial = truth;
-    if (left_at < 0 && !truth.intersects(initial)) left_at = k;
-    if (dynamic_at < 0 && hs.front().dynamic) dynamic_at = k;
-    if (k < 10) {
-      EXPECT_FALSE(hs.front().dynamic);
+// The box test's latency: dynamic within dynamic_confirm_scans scans (plus two for the filter
+// and the noise) of the person's box leaving its first box with the centre dynamic_min_distance_m
+// away, for the default distance and a shorter one.
+TEST(Tracker, WalkingPersonTurnsDynamicSoonAfterLeavingItsBoxByTheMinimumDistance) {
+  for (const double min_distance : {1.5, 1.0}) {
+    core::TrackingConfig config;
+    config.dynamic_test = core::DynamicTest::kBox;
+    config.dynamic_min_distance_m = min_distance;
+    ScriptRunner run(config, 9);
+    std::mt19937_64 noise(9);
+    const PersonShape shape = noisy(0.03f, 0.02f);
+    int left_at = -1, moved_at = -1, dynamic_at = -1;
+    core::Box3 initial;
+    for (int k = 0; k < 60; ++k) {
+      const double x = k < 10 ? 0.0 : 1.0 * (k - 10) * kDt;  // stands 1 s, then walks at 1 m/s
+      const auto& hs = run.step({{0, person_detection(at(x, 5.0), shape, &noise)}});
+      ASSERT_EQ(hs.size(), 1u);
+      const core::Box3 truth = person_detection(at(x, 5.0), shape).box;
+      if (k == 0) initial = truth;
+      if (left_at < 0 && !truth.intersects(initial)) left_at = k;
+      if (moved_at < 0 && x > min_distance) moved_at = k;
+      if (dynamic_at < 0 && hs.front().dynamic) dynamic_at = k;
+      if (k < 10) {
+        EXPECT_FALSE(hs.front().dynamic);
+      }
     }
+    ASSERT_GE(left_at, 0);
+    ASSERT_GE(moved_at, 0);
+    ASSERT_GE(dynamic_at, 0);
+    EXPECT_GE(dynamic_at, moved_at) << min_distance;
+    EXPECT_LE(dynamic_at, std::max(left_at, moved_at) + config.dynamic_confirm_scans + 2)
+        << min_distance;
+    EXPECT_TRUE(run.single_identity(0));
   }
-  ASSERT_GE(left_at, 0);
-  ASSERT_GE(dynamic_at, 0);
-  EXPECT_LE(dynamic_at, left_at + 10);
-  EXPECT_TRUE(run.single_identity(0));
 }
 
 TEST(Tracker, DynamicPersonComingToRestIsStaticAgainButStaysEverDynamic) {
