@@ -211,8 +211,11 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
   }
   predict_all(dt);
   assign(detections);
-  reassociate(detections);
   detection_used_.assign(detections.size(), 0);
+  for (const int d : col_of_row_) {
+    if (d != kUnassigned) detection_used_[static_cast<std::size_t>(d)] = 1;
+  }
+  reassociate(detections);
   for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
     const int d = col_of_row_[i];
     if (d == kUnassigned) {
@@ -220,7 +223,6 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
       look_for_missed(hypotheses_[i]);
     } else {
       correct(hypotheses_[i], detections[d], d);
-      detection_used_[d] = 1;
       ++stats_.assigned;
     }
   }
@@ -285,32 +287,26 @@ void Tracker::reassociate(const std::vector<core::Detection>& detections) {
   // scans (wide covariance) and a one-point detection (tight) are far apart even when their
   // means coincide, and the detection started a new track beside the old one (an identity
   // switch). A second, greedy pass pairs what the gate left over by horizontal distance.
+  // Extends col_of_row_ and detection_used_ (the gated assignment's pairs, marked by update()).
   if (config_.reassociate_distance_m <= 0.0 || detections.empty()) return;
-  std::vector<char> taken(detections.size(), 0);
-  for (const int c : col_of_row_) {
-    if (c != kUnassigned) taken[static_cast<std::size_t>(c)] = 1;
-  }
-  struct Pair {
-    double distance;
-    std::size_t row, col;
-  };
-  std::vector<Pair> pairs;
+  leftover_pairs_.clear();
   for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
     if (col_of_row_[i] != kUnassigned) continue;
     const Eigen::Vector2d at = hypotheses_[i].position().head<2>();
     for (std::size_t j = 0; j < detections.size(); ++j) {
-      if (taken[j]) continue;
+      if (detection_used_[j]) continue;
       const double d = (detections[j].centroid.cast<double>().head<2>() - at).norm();
-      if (d <= config_.reassociate_distance_m) pairs.push_back({d, i, j});
+      if (d <= config_.reassociate_distance_m) leftover_pairs_.push_back({d, i, j});
     }
   }
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
-    return a.distance < b.distance || (a.distance == b.distance && a.row < b.row);
-  });
-  for (const Pair& p : pairs) {
-    if (col_of_row_[p.row] != kUnassigned || taken[p.col]) continue;
+  std::sort(leftover_pairs_.begin(), leftover_pairs_.end(),
+            [](const LeftoverPair& a, const LeftoverPair& b) {
+              return a.distance < b.distance || (a.distance == b.distance && a.row < b.row);
+            });
+  for (const LeftoverPair& p : leftover_pairs_) {
+    if (col_of_row_[p.row] != kUnassigned || detection_used_[p.col]) continue;
     col_of_row_[p.row] = static_cast<int>(p.col);
-    taken[p.col] = 1;
+    detection_used_[p.col] = 1;
   }
 }
 

@@ -53,7 +53,7 @@ struct Hypothesis {
   Eigen::Vector3d anchor_viewpoint{Eigen::Vector3d::Zero()};  ///< sensor position when anchored
   bool occluded{false};       ///< missed, and the scan saw something in front of its prediction
   int seen_through_scans{0};  ///< consecutive missed scans that saw through its predicted points
-  bool unseen{false};  ///< missed, and no beam ended at its predicted points, none hid them
+  bool unseen{false};         ///< missed, and no beam ended at its predicted points, none hid them
   std::size_t points{0};      ///< points of the assigned detection this scan, 0 when missed
   int detection{-1};          ///< index of the detection assigned this scan, -1 when none
   DetectionSummary last_detection;  ///< the most recent assigned detection
@@ -142,7 +142,12 @@ class Tracker {
   std::vector<Eigen::Matrix3d> update_r_;       // Kalman update noise per detection
   std::vector<GaussianTerm> h_terms_, d_terms_;
   std::vector<int> col_of_row_;
-  std::vector<char> detection_used_;
+  std::vector<char> detection_used_;  // per detection: paired with a hypothesis this update
+  struct LeftoverPair {               // reassociate(): a candidate pair and its distance
+    double distance;
+    std::size_t row, col;
+  };
+  std::vector<LeftoverPair> leftover_pairs_;
   Eigen::MatrixXd cost_;
   std::uint64_t next_id_{1};
   std::int64_t stamp_ns_{0};
