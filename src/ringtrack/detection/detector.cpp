@@ -338,14 +338,16 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
   return left >= min_points && m - left >= min_points;
 }
 
+bool Detector::may_confirm(std::size_t n, const Frame& frame) const {
+  // Near a prediction a small cluster may confirm a track (a far person hit by one or two beams).
+  return n >= static_cast<std::size_t>(config_.relaxed_min_cluster_points) &&
+         !frame.predictions->empty();
+}
+
 bool Detector::may_be_small(std::size_t n, const Frame& frame) const {
-  // Near a prediction it may confirm a track (a far person hit by one or two beams); where
-  // earlier scans saw free space it may start one.
-  const bool relaxed = n >= static_cast<std::size_t>(config_.relaxed_min_cluster_points) &&
-                       !frame.predictions->empty();
-  const bool sparse =
-      frame.memory != nullptr && n >= static_cast<std::size_t>(config_.sparse_min_points);
-  return relaxed || sparse;
+  // ... and where earlier scans saw free space it may start one.
+  return may_confirm(n, frame) ||
+         (frame.memory != nullptr && n >= static_cast<std::size_t>(config_.sparse_min_points));
 }
 
 bool Detector::new_to_the_scene(const core::OrganizedScan& scan, const Frame& frame,
@@ -376,8 +378,7 @@ void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame
   const bool sparse = small && new_to_the_scene(scan, frame, begin, end);
   if (sparse) {
     small = false;
-  } else if (small && (n < static_cast<std::size_t>(config_.relaxed_min_cluster_points) ||
-                       frame.predictions->empty())) {
+  } else if (small && !may_confirm(n, frame)) {
     ++stats_.too_small;  // neither new to the scene nor able to confirm a track
     return;
   }

@@ -119,6 +119,7 @@ class Detector {
   template <core::JoinRule kRule>
   void grow_clusters(const core::OrganizedScan& scan, const Frame& frame);
   void evaluate_cluster(const core::OrganizedScan& scan, const Frame& frame);
+  [[nodiscard]] bool may_confirm(std::size_t n, const Frame& frame) const;
   [[nodiscard]] bool may_be_small(std::size_t n, const Frame& frame) const;
   [[nodiscard]] bool new_to_the_scene(const core::OrganizedScan& scan, const Frame& frame,
                                       std::size_t begin, std::size_t end) const;
