@@ -83,8 +83,6 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
   map_columns(scan);
   const ReturnStatus* status = scan.statuses().data();
   const float* range = scan.ranges().data();
-  const auto tolerance = static_cast<float>(config_.tolerance_m);
-  const auto relative = static_cast<float>(config_.relative_tolerance);
   const auto smoothing = static_cast<float>(config_.smoothing);
   float* background = background_.data();
   std::uint16_t* streak = streak_.data();
@@ -103,7 +101,7 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
           // arithmetic as observe()), everything else in observe().
           const float bg = background[cell];
           const float x = range[i];
-          if (std::isfinite(bg) && std::abs(x - bg) <= tolerance + relative * std::min(x, bg)) {
+          if (std::isfinite(bg) && same_surface(x, bg)) {
             background[cell] = bg + smoothing * (x - bg);
             streak[cell] = 0;
           } else {
@@ -152,10 +150,14 @@ void BackgroundRangeModel::map_columns(const OrganizedScan& scan) {
   }
 }
 
+bool BackgroundRangeModel::same_surface(float a, float b) const {
+  return std::abs(a - b) <= config_.tolerance_m + config_.relative_tolerance * std::min(a, b);
+}
+
 void BackgroundRangeModel::observe(std::size_t cell, float range_m) {
   const auto same = [&](float a, float b) {
     if (std::isinf(a) || std::isinf(b)) return a == b;
-    return std::abs(a - b) <= config_.tolerance_m + config_.relative_tolerance * std::min(a, b);
+    return same_surface(a, b);
   };
   float& bg = background_[cell];
   float& cand = candidate_[cell];

@@ -59,6 +59,8 @@ class BackgroundRangeModel : public SceneMemory {
  private:
   [[nodiscard]] int bin_of(double azimuth_rad) const;
   void map_columns(const OrganizedScan& scan);
+  /// Two finite ranges are one surface (within the tolerances).
+  [[nodiscard]] bool same_surface(float a, float b) const;
   void observe(std::size_t cell, float range_m);
 
   BackgroundRangeConfig config_;
