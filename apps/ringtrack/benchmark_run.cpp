@@ -87,7 +87,7 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
     for (const tracking::Hypothesis& h : result.hypotheses) {
       if (!h.reported) continue;
       tracks.push_back(
-          {k, static_cast<std::int64_t>(h.id), h.position(), h.dynamic, h.ever_dynamic, h.person});
+          {k, static_cast<std::int64_t>(h.id), h.reported_position, h.dynamic, h.ever_dynamic, h.person});
     }
     out.times.segmentation.push_back(result.times.segmentation_ms);
     out.times.detection.push_back(result.times.detection_ms);

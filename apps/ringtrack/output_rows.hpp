@@ -17,7 +17,7 @@ inline io::TrackRow track_row(std::uint64_t scan, std::int64_t stamp_ns,
   row.scan = scan;
   row.stamp_ns = stamp_ns;
   row.id = h.id;
-  row.position = h.position();
+  row.position = h.reported_position;
   row.velocity = h.velocity_mps;
   row.box = h.box;
   row.dynamic = h.dynamic;

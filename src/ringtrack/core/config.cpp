@@ -260,6 +260,12 @@ class Schema {
            "Kalman update: the measurement noise of a detection's centroid is its standard error "
            "(point covariance / points) plus this standard deviation per axis (m: limb swing, "
            "partial views); 0 = update with the association covariance instead");
+    choice("reported_position", t.reported_position,
+           {{"measured", ReportedPosition::kMeasured}, {"filtered", ReportedPosition::kFiltered}},
+           "position a hypothesis reports in a scan that measured it: measured = the centroid of "
+           "its detection (where the scan shows the object), filtered = the Kalman estimate "
+           "(smoother, lags a turning walker); a missed hypothesis always reports the filter's "
+           "prediction");
     number("few_point_stddev_m", t.few_point_stddev_m, 0.0, 100.0,
            "association: a detection of one or two points (a far person's sparse or relaxed "
            "cluster may be any part of the body) has at least this horizontal standard deviation "

@@ -60,16 +60,23 @@ enum class AssociationCost {
   kEuclidean,      ///< 3-D distance between the predicted position and the centroid
 };
 
-/// How a hypothesis' height evolves.
 /// What turns a static hypothesis dynamic (docs/tracking.md, "Static and dynamic").
 enum class DynamicTest {
   kFreeSpace,  ///< the scan sees through space the object occupied where it was anchored
   kBox,        ///< its footprint leaves the anchor footprint (the paper's box test, refined)
 };
 
+/// How a hypothesis' height evolves.
 enum class VerticalMotion {
   kConstantPosition,  ///< vertical velocity held at zero: walkers and ground robots
   kConstantVelocity,  ///< like the horizontal axes: flying objects
+};
+
+/// What position outputs list for a hypothesis measured in the scan (docs/tracking.md,
+/// "Reported position").
+enum class ReportedPosition {
+  kMeasured,  ///< the centroid of its detection in this scan (the filter's when missed)
+  kFiltered,  ///< the Kalman filter's estimate in every scan
 };
 
 /// Multi-object tracking (paper III.D): constant-velocity Kalman filters in the world frame,
@@ -88,6 +95,7 @@ struct TrackingConfig {
   double initial_velocity_stddev_mps{1.5};   // velocity prior of a new hypothesis
   double measurement_covariance_scale{0.5};  // detection covariance times this: association R
   double centroid_noise_m{0.05};   // filter update noise: centroid standard error (+) this per axis
+  ReportedPosition reported_position{ReportedPosition::kMeasured};  // what outputs list
   double few_point_stddev_m{0.2};  // association: horizontal std floor of 1-2-point detections
   double reassociate_distance_m{0.5};  // second pass: leftovers this close (horizontally) pair
   double delete_eigenvalue_m2{1.0};    // delete when a position-covariance eigenvalue exceeds this

@@ -240,6 +240,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
     report_velocity(h);
     classify(h);
     decide_report(h);
+    set_reported_position(h);
     update_person_flag(h);
   }
   visibility_ = nullptr;  // the scan may not outlive this call
@@ -445,6 +446,18 @@ void Tracker::decide_report(Hypothesis& h) const {
   h.confirmed = h.confirmed || h.hits >= config_.confirm_hits;
   h.reported = h.confirmed && (h.missed_scans == 0 || h.occluded ||
                                (h.missed_scans <= config_.report_missed_scans && !h.unseen));
+}
+
+void Tracker::set_reported_position(Hypothesis& h) const {
+  // The filter smooths the centroid over scans, so it lags a walker that turns or changes pace
+  // and its height follows the rings only slowly; the detection's centroid is where this scan
+  // shows the object (the evaluation's ground truth is that centroid too: docs/tracking.md,
+  // "Reported position"). The filter still drives association and prediction, and a missed
+  // hypothesis has nothing better than its prediction.
+  const bool measured = h.detection >= 0;
+  h.reported_position = measured && config_.reported_position == core::ReportedPosition::kMeasured
+                            ? h.last_detection.centroid.cast<double>()
+                            : h.filter.position();
 }
 
 void Tracker::update_person_flag(Hypothesis& h) const {

@@ -58,7 +58,10 @@ struct Hypothesis {
   int detection{-1};          ///< index of the detection assigned this scan, -1 when none
   DetectionSummary last_detection;  ///< the most recent assigned detection
 
-  /// Position estimate (world, m).
+  Eigen::Vector3d reported_position{Eigen::Vector3d::Zero()};  ///< what outputs list (world, m):
+                                      ///< tracking.reported_position, set by every update
+
+  /// Position estimate of the filter (world, m): association, prediction, deletion use it.
   [[nodiscard]] Eigen::Vector3d position() const { return filter.position(); }
   /// Covariance of the position estimate (m^2).
   [[nodiscard]] Eigen::Matrix3d position_covariance() const { return filter.position_covariance(); }
@@ -132,6 +135,7 @@ class Tracker {
   void look_for_missed(Hypothesis& h) const;
   void report_velocity(Hypothesis& h) const;
   void decide_report(Hypothesis& h) const;
+  void set_reported_position(Hypothesis& h) const;
   void update_person_flag(Hypothesis& h) const;
 
   core::TrackingConfig config_;

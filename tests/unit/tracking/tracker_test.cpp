@@ -133,6 +133,35 @@ TEST(Tracker, PositionFollowsTheCentroid) {
   EXPECT_NEAR(run.tracker.hypotheses().front().position().x(), 5.3, 0.06);
 }
 
+// What outputs list: with reported_position = measured, the detection's own centroid in a scan
+// that measured the hypothesis (the filter lags a walker turning by 90 degrees), the filter's
+// prediction in a scan that missed it; with filtered, the filter's estimate always.
+TEST(Tracker, ReportedPositionIsTheMeasuredCentroidOrThePrediction) {
+  for (const auto mode : {core::ReportedPosition::kMeasured, core::ReportedPosition::kFiltered}) {
+    core::TrackingConfig config;
+    config.reported_position = mode;
+    ScriptRunner run(config);
+    Eigen::Vector3f last = at(0, 0);
+    for (int k = 0; k < 20; ++k) {  // walks east, then turns north at 1 m/s for two scans
+      last = k < 18 ? at(0.1 * k, 0.0) : at(1.7, 0.1 * (k - 17));
+      run.step({{0, person_detection(last, PersonShape{})}});
+    }
+    ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+    const Hypothesis& h = run.tracker.hypotheses().front();
+    const double lag = (h.position().head<2>() - last.head<2>().cast<double>()).norm();
+    EXPECT_GT(lag, 0.02) << "the filter must lag the turn for this test to say anything";
+    if (mode == core::ReportedPosition::kMeasured) {
+      EXPECT_EQ(h.reported_position, h.last_detection.centroid.cast<double>());
+    } else {
+      EXPECT_EQ(h.reported_position, h.position());
+    }
+    run.step({});  // missed: the prediction is all there is
+    ASSERT_EQ(run.tracker.hypotheses().size(), 1u);
+    EXPECT_EQ(run.tracker.hypotheses().front().reported_position,
+              run.tracker.hypotheses().front().position());
+  }
+}
+
 TEST(Tracker, ReportsZeroBelowOneKmhButKeepsLearning) {
   // 0.2 m/s = 0.72 km/h: reported as zero, yet the filter's own estimate converges to it.
   ScriptRunner run;
