@@ -51,6 +51,8 @@ struct DetectionConfig {
                                        // axis) are split at a density valley; 0 = no splitting
   double split_bin_m{0.1};             // width of the split's sliding window along the axis
   double split_valley_ratio{0.5};      // a valley splits at coverage <= this * the smaller peak
+  double complete_range_m{0.3};   // completion: column neighbours within this range join (0 = off)
+  double complete_margin_m{0.2};  // ... inside the box grown by this (horizontally and on top)
 };
 
 /// Cost of pairing a detection with a hypothesis in the assignment (paper III.D).

@@ -204,13 +204,16 @@ const FilterResult& DynamicObjectFilter::process(
       object.gap.push_back({sequence, h.box});
       continue;
     }
-    for (const auto cell : detections[h.detection].indices) {
-      if (cell >= point_of_cell_.size() || point_of_cell_[cell] < 0) continue;
-      const auto p = static_cast<std::size_t>(point_of_cell_[cell]);
-      if (current.removed[p]) continue;
-      current.removed[p] = 1;
-      ++current.removed_count;
-      result_.removed_cells.push_back(cell);
+    // The object's cells: the detector's and those the completion added (its legs).
+    for (const auto* cells : {&detections[h.detection].indices, &detections[h.detection].completion}) {
+      for (const auto cell : *cells) {
+        if (cell >= point_of_cell_.size() || point_of_cell_[cell] < 0) continue;
+        const auto p = static_cast<std::size_t>(point_of_cell_[cell]);
+        if (current.removed[p]) continue;
+        current.removed[p] = 1;
+        ++current.removed_count;
+        result_.removed_cells.push_back(cell);
+      }
     }
     if (!object.gap.empty()) {
       // Recovered after a gap: its points in the missed scans lie in the predicted boxes or,

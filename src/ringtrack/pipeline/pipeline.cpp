@@ -22,6 +22,7 @@ Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
       model_(std::move(model)),
       segmenter_(config.segmentation),
       detector_(config.detection),
+      completer_(config.detection),
       tracker_(config.tracking),
       filter_(config.mapping),
       background_(model_, config.background) {
@@ -54,7 +55,8 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   // A moving sensor has no such memory yet: what earlier scans saw from other viewpoints says
   // little about single far points (docs/BENCHMARK.md, issue 10).
   const core::SceneMemory* memory = resting && background_.scans() > 0 ? &background_ : nullptr;
-  const auto& detections = detector_.detect(scan, labels_, pose, predictions, memory);
+  const auto& detections =
+      completer_.complete(scan, pose, detector_.detect(scan, labels_, pose, predictions, memory));
   if (resting) background_.update(scan);
   const auto t2 = Clock::now();
   // What this scan sees of the space hypotheses occupied (free-space tests; docs/visibility.md).

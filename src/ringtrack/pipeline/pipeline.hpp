@@ -11,6 +11,7 @@
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
+#include "ringtrack/detection/completion.hpp"
 #include "ringtrack/detection/detector.hpp"
 #include "ringtrack/mapping/dynamic_object_filter.hpp"
 #include "ringtrack/segmentation/segmenter.hpp"
@@ -68,6 +69,7 @@ class Pipeline {
   core::SensorModel model_;
   segmentation::Segmenter segmenter_;
   detection::Detector detector_;
+  detection::DetectionCompleter completer_;
   tracking::Tracker tracker_;
   mapping::DynamicObjectFilter filter_;
   core::BackgroundRangeModel background_;

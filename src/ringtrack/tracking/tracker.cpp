@@ -321,7 +321,8 @@ void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
   h.missed_scans = 0;
   h.points = d.indices.size();
   h.detection = index;
-  h.last_detection = {d.centroid, d.covariance, d.box, d.indices.size(), d.relaxed, stamp_ns_};
+  h.last_detection = {d.centroid,       d.object_centroid(), d.covariance, d.box,
+                      d.indices.size(), d.relaxed,           stamp_ns_};
   ++h.hits;
   h.occluded = false;
   h.unseen = false;
@@ -385,7 +386,8 @@ void Tracker::create(const core::Detection& d, int index) {
   h.age_scans = 1;
   h.points = d.indices.size();
   h.detection = index;
-  h.last_detection = {d.centroid, d.covariance, d.box, d.indices.size(), d.relaxed, stamp_ns_};
+  h.last_detection = {d.centroid,       d.object_centroid(), d.covariance, d.box,
+                      d.indices.size(), d.relaxed,           stamp_ns_};
   h.hits = 1;
   remember_points(h, d);
   h.anchor_points = h.last_points;
@@ -451,12 +453,12 @@ void Tracker::decide_report(Hypothesis& h) const {
 void Tracker::set_reported_position(Hypothesis& h) const {
   // The filter smooths the centroid over scans, so it lags a walker that turns or changes pace
   // and its height follows the rings only slowly; the detection's centroid is where this scan
-  // shows the object (the evaluation's ground truth is that centroid too: docs/tracking.md,
-  // "Reported position"). The filter still drives association and prediction, and a missed
+  // shows the object, with the cells the completion added (the evaluation's ground truth is
+  // the centroid of all the object's hit points: docs/tracking.md, "Reported position"). The filter still drives association and prediction, and a missed
   // hypothesis has nothing better than its prediction.
   const bool measured = h.detection >= 0;
   h.reported_position = measured && config_.reported_position == core::ReportedPosition::kMeasured
-                            ? h.last_detection.centroid.cast<double>()
+                            ? h.last_detection.object_centroid.cast<double>()
                             : h.filter.position();
 }
 

@@ -18,6 +18,7 @@ namespace ringtrack::tracking {
 /// What a hypothesis keeps of the last detection assigned to it.
 struct DetectionSummary {
   Eigen::Vector3f centroid{Eigen::Vector3f::Zero()};        ///< world frame
+  Eigen::Vector3f object_centroid{Eigen::Vector3f::Zero()};  ///< with the completion (world)
   Eigen::Matrix3f covariance{Eigen::Matrix3f::Identity()};  ///< as the detector gave it
   core::Box3 box;                                           ///< world frame
   std::size_t points{0};                                    ///< number of grid cells
