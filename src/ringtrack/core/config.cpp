@@ -327,7 +327,7 @@ class Schema {
             "one-scan blips never appear, new objects appear this many scans minus one late");
     integer("report_missed_scans", t.report_missed_scans, 0, 1000000,
             "a hypothesis missed in more consecutive scans than this is kept (for its id) but not "
-            "reported, unless the scan shows it hidden behind something (occluded)");
+            "reported, hidden (occluded) or not");
     integer("person_min_scans", t.person_min_scans, 1, 1000000,
             "a confirmed hypothesis is flagged person (tracks.csv column person, kept once set, "
             "moving or standing) once this many of its scans had a strict, person-shaped "

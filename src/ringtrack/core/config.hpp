@@ -117,7 +117,7 @@ struct TrackingConfig {
   int occluded_coast_scans{30};  // a hypothesis whose predicted points are occluded coasts this
                                  // many missed scans before the covariance test may delete it
   int confirm_hits{2};           // detections before a hypothesis is reported (M of M)
-  int report_missed_scans{5};    // a hypothesis missed longer is not reported (unless occluded)
+  int report_missed_scans{5};    // a hypothesis missed longer is not reported (hidden or not)
   int person_min_scans{10};      // strict detections before a confirmed hypothesis is a person
   int free_delete_scans{2};  // missed in this many consecutive scans seeing through its predicted
                              // points: deleted

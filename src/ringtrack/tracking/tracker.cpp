@@ -443,10 +443,11 @@ void Tracker::delete_merged() {
 void Tracker::decide_report(Hypothesis& h) const {
   // Confirmation (M detections) keeps one-scan blips out of the output, at the cost of
   // confirm_hits - 1 scans of latency for a new object. A hypothesis that has gone unmeasured
-  // for long is kept (its id survives a short gap) but not listed: its prediction drifts off the
-  // object, unless the scan shows the object is hidden where it is predicted.
+  // for long is kept (its id survives a short gap, longer when the scan shows it hidden) but
+  // not listed: its prediction drifts off the object, and a hidden object has no hit points, so
+  // listing it only counts as a false positive (docs/tracking.md, "What is reported").
   h.confirmed = h.confirmed || h.hits >= config_.confirm_hits;
-  h.reported = h.confirmed && (h.missed_scans == 0 || h.occluded ||
+  h.reported = h.confirmed && (h.missed_scans == 0 ||
                                (h.missed_scans <= config_.report_missed_scans && !h.unseen));
 }
 
