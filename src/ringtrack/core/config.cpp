@@ -287,6 +287,11 @@ class Schema {
     number("merge_distance_m", t.merge_distance_m, 0.0, 100.0,
            "a younger hypothesis closer than this (horizontally, with overlapping heights) to an "
            "older one is deleted (m)");
+    number("few_point_merge_distance_m", t.few_point_merge_distance_m, 0.0, 100.0,
+           "a younger hypothesis is deleted this close (horizontally, with overlapping heights) "
+           "to an older one when both were last measured by one or two points (a far person's "
+           "hits fall anywhere on the body; two tracks on one such person took its hits in "
+           "turns); never less than merge_distance_m (m)");
     number("min_speed_kmh", t.min_speed_kmh, 0.0, 1e4,
            "speeds up to this are reported as zero (km/h); the filter keeps its estimate");
     number("max_speed_kmh", t.max_speed_kmh, 1e-6, 1e4,

@@ -102,6 +102,8 @@ struct TrackingConfig {
   double reassociate_distance_m{0.5};  // second pass: leftovers this close (horizontally) pair
   double delete_eigenvalue_m2{1.0};    // delete when a position-covariance eigenvalue exceeds this
   double merge_distance_m{0.3};        // younger hypotheses this close to older ones are deleted
+  double few_point_merge_distance_m{0.6};  // ... this close when both were last measured by <= 2
+                                           // points (far people)
   double min_speed_kmh{1.0};           // reported speeds up to this are reported as zero
   double max_speed_kmh{15.0};          // speeds are capped here (state and report)
   double dynamic_min_distance_m{1.5};  // besides disjoint footprints, the centre must move this far

@@ -414,7 +414,11 @@ void Tracker::delete_uncertain() {
 void Tracker::delete_merged() {
   // hypotheses_ is in creation order, so a later entry is the younger one.
   const double r = config_.merge_distance_m;
-  if (r <= 0.0) return;
+  // Two hypotheses last measured by one or two points each may sit on one far person: its hits
+  // fall anywhere on the body, a hit the gate rejected started the second one, and then the two
+  // took the person's hits in turns (an identity switch each time; docs/tracking.md, "Merging").
+  const double few_point_reach = std::max(r, config_.few_point_merge_distance_m);
+  if (few_point_reach <= 0.0) return;
   std::vector<char> doomed(hypotheses_.size(), 0);
   for (std::size_t j = 1; j < hypotheses_.size(); ++j) {
     const auto& young = hypotheses_[j];
@@ -422,7 +426,11 @@ void Tracker::delete_merged() {
       if (doomed[i]) continue;
       const auto& old = hypotheses_[i];
       const double horizontal = (young.position() - old.position()).head<2>().norm();
-      if (horizontal < r && vertical_gap(young.box, old.box) < r) {
+      const double reach = young.last_detection.points <= kFewPoints &&
+                                   old.last_detection.points <= kFewPoints
+                               ? few_point_reach
+                               : r;
+      if (horizontal < reach && vertical_gap(young.box, old.box) < reach) {
         doomed[j] = 1;
         break;
       }

@@ -477,6 +477,39 @@ TEST(Tracker, YoungerHypothesesNearOlderOnesAreDeleted) {
   EXPECT_EQ(run.tracker.hypotheses().size(), 2u);
 }
 
+// A far person hit by single points: a second one-point hit 0.45 m from the first starts a
+// second hypothesis, which is merged away at once (few_point_merge_distance_m), so the person
+// keeps one id; with only merge_distance_m (0.3 m) the two stay and take the hits in turns.
+// People hit by many points 0.45 m apart (side by side) stay two.
+TEST(Tracker, TwoTracksOnOneFarPersonBecomeOne) {
+  PersonShape one_point;
+  one_point.points = 1;
+  for (const double few_point_merge : {0.6, 0.3}) {
+    core::TrackingConfig config;
+    config.few_point_merge_distance_m = few_point_merge;
+    ScriptRunner run(config);
+    for (int k = 0; k < 5; ++k) run.step({{0, person_detection(at(30.0, 0.0), one_point)}});
+    run.step({{0, person_detection(at(30.0, 0.0), one_point)},
+              {1, person_detection(at(30.0, 0.45), one_point)}});
+    for (int k = 0; k < 20; ++k) {
+      run.step({{0, person_detection(at(30.0, k % 2 == 0 ? 0.45 : 0.0), one_point)}});
+    }
+    if (few_point_merge > 0.5) {
+      EXPECT_EQ(run.tracker.hypotheses().size(), 1u);
+      EXPECT_TRUE(run.single_identity(0)) << "the person kept its first id";
+    } else {
+      EXPECT_EQ(run.tracker.hypotheses().size(), 2u) << "without the rule the duplicate stays";
+    }
+  }
+  ScriptRunner pair;
+  for (int k = 0; k < 10; ++k) {
+    pair.step({{0, person_detection(at(10.0, 0.0), {})}, {1, person_detection(at(10.0, 0.45), {})}});
+  }
+  EXPECT_EQ(pair.tracker.hypotheses().size(), 2u);
+  EXPECT_TRUE(pair.single_identity(0));
+  EXPECT_TRUE(pair.single_identity(1));
+}
+
 TEST(Tracker, FiftyPeopleOnCirclesKeepTheirIds) {
   ScriptRunner run({}, 10);
   std::mt19937_64 noise(10);
