@@ -8,6 +8,11 @@ namespace ringtrack::detection {
 namespace {
 
 constexpr std::int32_t kFree = -1;
+// The cells a walk step may reach: the adjacent ring, the same column and the ones beside it (a
+// tilted or turning sensor's rings are not stacked column by column, and a silhouette's edge
+// cell may sit diagonally below the last object cell).
+constexpr int kColumnSteps[] = {0, -1, 1};
+constexpr int kMoves = 6;  // down through kColumnSteps, then up
 // A cell whose column continues downwards at nearly the same height lies on the ground: within
 // kFlatRise plus kFlatSlope = tan(3 deg) per metre up to kFlatReach (far apart, the next ring's
 // ground hit says little about the slope, and a shin 0.1 m up must not count as flat).
@@ -49,8 +54,7 @@ bool DetectionCompleter::level_with(const core::OrganizedScan& scan, std::size_t
                                     const Eigen::Vector3d& w) const {
   if (!scan.valid(k)) return false;
   const Eigen::Vector3d step = world(scan, k) - w;
-  return std::abs(step.z()) <=
-         kFlatRise + kFlatSlope * std::min(kFlatReach, step.head<2>().norm());
+  return std::abs(step.z()) <= kFlatRise + kFlatSlope * std::min(kFlatReach, step.head<2>().norm());
 }
 
 bool DetectionCompleter::on_ground(const core::OrganizedScan& scan, std::size_t j,
@@ -64,7 +68,7 @@ bool DetectionCompleter::on_ground(const core::OrganizedScan& scan, std::size_t 
   const float range = scan.range_m(j);
   const double step_rad = 2.0 * std::numbers::pi / columns;
   const int offset = 1 + static_cast<int>(std::ceil((half_width_m + kBesideMargin) /
-                                                     (static_cast<double>(range) * step_rad)));
+                                                    (static_cast<double>(range) * step_rad)));
   if (offset >= columns / 2) return false;
   const int ring = scan.ring_of(j);
   const int column = scan.column_of(j);
@@ -93,9 +97,13 @@ void DetectionCompleter::extend(const core::OrganizedScan& scan, std::int32_t ow
   // while it is walked: a cell added below is itself extended further down).
   for (std::size_t k = 0; k < own + detection.completion.size(); ++k) {
     const std::uint32_t i = k < own ? detection.indices[k] : detection.completion[k - own];
-    for (const bool up : {false, true}) {
+    const std::size_t column = i % columns;
+    for (int move = 0; move < kMoves; ++move) {
+      const bool up = move >= kMoves / 2;
       if (up ? i + columns >= cells : i < columns) continue;
-      const std::size_t j = up ? i + columns : i - columns;
+      const std::size_t next_column =
+          (column + columns + kColumnSteps[move % (kMoves / 2)]) % columns;
+      const std::size_t j = (up ? i + columns : i - columns) - column + next_column;
       if (owner_[j] != kFree || !scan.valid(j)) continue;
       if (std::abs(range[j] - range[i]) > tolerance) continue;
       const Eigen::Vector3d w = world(scan, j);

@@ -12,21 +12,21 @@
 
 namespace ringtrack::detection {
 
-/// Finds, for each detection, the cells above and below its own in the same column that hit the
-/// same surface, and stores them as its completion (core::Detection::completion,
-/// completed_centroid). A cell joins when its range differs by at most complete_range_m from
-/// the cell next to it in the column that already belongs to the object, the step between the
-/// two is steeper than 45 degrees, it lies within the detection's box grown by
+/// Finds, for each detection, the cells of the rings above and below its own (same column or one
+/// beside it) that hit the same surface, and stores them as its completion
+/// (core::Detection::completion, completed_centroid). A cell joins when its range differs by at
+/// most complete_range_m from the neighbouring object cell it is reached from, the step between
+/// the two is steeper than 45 degrees, it lies within the detection's box grown by
 /// complete_margin_m horizontally and not above the box's top by more than that, no other
 /// detection has it, and (going down) it is not on the ground: neither the cell below it in the
-/// column nor the cells of its ring just past the object's half width on either side continue
-/// it at the same height (those beside also at the same range). Repeated down and up the column, so a person's legs join the torso the
-/// segmentation found. Why: the segmentation finds an object by the range jumps along each
-/// ring, and a low ring that hits the legs where the ground behind is at a similar range has no
-/// jump there; those cells stayed unsegmented, the reported centroid sat 0.1-0.3 m too high on
-/// people with few points and their legs stayed in the static map (docs/detection.md,
-/// "Completion"). A detection that would grow taller than max_height_m (a wall edge, a pillar)
-/// gets no completion. Centroid, covariance, box and indices stay as the detector made them.
+/// column nor the cells of its ring just past the object's half width on either side continue it
+/// at the same height (those beside also at the same range). Repeated ring by ring, so a person's
+/// legs join the torso the segmentation found. Why: the segmentation finds an object by the range
+/// jumps along each ring, and a low ring that hits the legs where the ground behind is at a
+/// similar range has no jump there; those cells stayed unsegmented, the reported centroid sat
+/// 0.1-0.3 m too high on people with few points and their legs stayed in the static map
+/// (docs/detection.md, "Completion"). A detection that would grow taller than max_height_m gets
+/// no completion. Centroid, covariance, box and indices stay as the detector made them.
 ///
 /// Cost: O(cells of the detections); the buffers live in the object, so steady-state calls do
 /// not allocate.

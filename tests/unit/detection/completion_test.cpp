@@ -1,6 +1,6 @@
 // Completion of detections along their columns (detection/completion.hpp): a person whose legs
-// the segmentation missed gets them back, the ground at the feet and a wall never join, and the
-// fast walk agrees with a fixpoint reference on random scenes.
+// the segmentation missed gets them back, the ground at the feet and the wall below a patch never
+// join, and the fast walk agrees with a fixpoint reference on random scenes.
 
 #include "ringtrack/detection/completion.hpp"
 
@@ -61,15 +61,16 @@ sim::SimpleScene people_at(const std::vector<std::pair<double, double>>& range_a
   scene.range_noise_m = 0.01;
   std::uint32_t id = 1;
   for (const auto& [range, az] : range_azimuth_deg) {
-    scene.cylinders.push_back(sim::SimpleScene::person(range * std::cos(az * kDeg),
-                                                       range * std::sin(az * kDeg), kGroundZ, id++));
+    scene.cylinders.push_back(sim::SimpleScene::person(
+        range * std::cos(az * kDeg), range * std::sin(az * kDeg), kGroundZ, id++));
   }
   return scene;
 }
 
 // The fixpoint the walk must reach, computed the slow way: sweep every cell of the scan until
-// no cell joins, detection after detection in order, each cell joining when a neighbour above
-// or below already belongs to the object and the documented conditions hold.
+// no cell joins, detection after detection in order, each cell joining when a neighbour in the
+// ring above or below (same column or one beside it) already belongs to the object and the
+// documented conditions hold.
 std::vector<std::vector<std::uint32_t>> reference_completion(
     const core::OrganizedScan& scan, const core::DetectionConfig& config,
     const std::vector<core::Detection>& detections) {
@@ -92,8 +93,8 @@ std::vector<std::vector<std::uint32_t>> reference_completion(
     const auto offset = static_cast<std::size_t>(1 + std::ceil((half_width + 0.3) / arc));
     if (offset >= columns / 2) return false;
     const std::size_t ring_start = j - j % columns;
-    for (const std::size_t c : {(j % columns + columns - offset) % columns,
-                                (j % columns + offset) % columns}) {
+    for (const std::size_t c :
+         {(j % columns + columns - offset) % columns, (j % columns + offset) % columns}) {
       const std::size_t k = ring_start + c;
       if (level(k, j) && std::abs(scan.range_m(k) - scan.range_m(j)) <= config.complete_range_m) {
         return true;
@@ -118,19 +119,27 @@ std::vector<std::vector<std::uint32_t>> reference_completion(
             w.z() > det.box.max.z() + m) {
           continue;
         }
+        bool joined = false;
         for (const bool j_below : {true, false}) {
-          const std::size_t i = j_below ? j + columns : j - columns;
-          if ((j_below && i >= scan.size()) || (!j_below && j < columns)) continue;
-          if (!members.count(i)) continue;
-          if (std::abs(scan.range_m(j) - scan.range_m(i)) > config.complete_range_m) continue;
-          const Eigen::Vector3d step = w - world(i);
-          if (std::abs(step.z()) < step.head<2>().norm()) continue;
-          if (j_below && on_ground(j, half_width)) continue;
-          members.insert(j);
-          added.insert(j);
-          owner[j] = static_cast<int>(d);
-          changed = true;
-          break;
+          for (const long dc : {-1L, 0L, 1L}) {
+            if (joined) break;
+            if ((j_below && j + columns >= scan.size()) || (!j_below && j < columns)) continue;
+            const std::size_t ring_start = (j_below ? j + columns : j - columns) - j % columns;
+            const auto c = static_cast<std::size_t>(
+                (static_cast<long>(j % columns) + dc + static_cast<long>(columns)) %
+                static_cast<long>(columns));
+            const std::size_t i = ring_start + c;
+            if (!members.count(i)) continue;
+            if (std::abs(scan.range_m(j) - scan.range_m(i)) > config.complete_range_m) continue;
+            const Eigen::Vector3d step = w - world(i);
+            if (std::abs(step.z()) < step.head<2>().norm()) continue;
+            if (j_below && on_ground(j, half_width)) continue;
+            members.insert(j);
+            added.insert(j);
+            owner[j] = static_cast<int>(d);
+            changed = true;
+            joined = true;
+          }
         }
       }
     }
@@ -171,8 +180,8 @@ TEST(DetectionCompleter, PeopleGetTheirLegsBackButNotTheGround) {
       EXPECT_EQ(s.rendered.labels[j], id) << "detection " << d << " took cell " << j;
     }
     // Every leg cell but those on the ground-level feet joins.
-    EXPECT_GE(c.completion.size() * 10, legs * 8) << "person " << id << ": " << c.completion.size()
-                                                  << " of " << legs << " leg cells";
+    EXPECT_GE(c.completion.size() * 10, legs * 8)
+        << "person " << id << ": " << c.completion.size() << " of " << legs << " leg cells";
     const Eigen::Vector3d truth = true_centroid(s.rendered, id);
     const double before = (c.centroid.cast<double>() - truth).norm();
     const double after = (c.object_centroid().cast<double>() - truth).norm();
@@ -181,7 +190,7 @@ TEST(DetectionCompleter, PeopleGetTheirLegsBackButNotTheGround) {
   }
 }
 
-TEST(DetectionCompleter, AWallPatchGetsNoCompletionAndCellsOfOthersAreNeverTaken) {
+TEST(DetectionCompleter, AWallPatchIsNotDescendedAndCellsOfOthersAreNeverTaken) {
   sim::SimpleScene scene;
   scene.ground_z_m = kGroundZ;
   scene.wall_radius_m = 6.0;
@@ -200,8 +209,13 @@ TEST(DetectionCompleter, AWallPatchGetsNoCompletionAndCellsOfOthersAreNeverTaken
   const auto detections = detector.detect(scan, labels, core::Pose{});
   ASSERT_EQ(detections.size(), 1u);
   DetectionCompleter completer{core::DetectionConfig{}};
-  EXPECT_TRUE(completer.complete(scan, core::Pose{}, detections).front().completion.empty())
-      << "the wall runs from the ground up: completed it is taller than a person";
+  // The wall below the patch continues beside it at the same height and range: a surface wider
+  // than the object, so the walk does not descend it (and were it let down to the ground, the
+  // completed patch would be taller than a person and keep nothing).
+  const auto& wall = completer.complete(scan, core::Pose{}, detections).front();
+  for (const auto j : wall.completion) {
+    EXPECT_GE(scan.point(j).z(), wall.box.min.z() - 1e-4f) << "cell " << j << " below the patch";
+  }
 
   // Two detections in the same columns, one above the other: neither takes the other's cells.
   const Scene s = render_upper_bodies(people_at({{8.0, 30.0}}), 0.9);
@@ -249,8 +263,7 @@ TEST(DetectionCompleter, MatchesTheFixpointReferenceOnRandomScenes) {
     const Scene s = render_upper_bodies(scene, cut(rng));
     const auto detections = detector.detect(s.rendered.scan, s.labels, core::Pose{});
     const auto& fast = completer.complete(s.rendered.scan, core::Pose{}, detections);
-    const auto slow =
-        reference_completion(s.rendered.scan, core::DetectionConfig{}, detections);
+    const auto slow = reference_completion(s.rendered.scan, core::DetectionConfig{}, detections);
     ASSERT_EQ(fast.size(), slow.size());
     for (std::size_t d = 0; d < fast.size(); ++d) {
       EXPECT_EQ(fast[d].completion, slow[d]) << "trial " << trial << ", detection " << d;
