@@ -86,8 +86,8 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
     if (options.on_scan) options.on_scan(scan, result);
     for (const tracking::Hypothesis& h : result.hypotheses) {
       if (!h.reported) continue;
-      tracks.push_back(
-          {k, static_cast<std::int64_t>(h.id), h.reported_position, h.dynamic, h.ever_dynamic, h.person});
+      tracks.push_back({k, static_cast<std::int64_t>(h.id), h.reported_position, h.dynamic,
+                        h.ever_dynamic, h.person});
     }
     out.times.segmentation.push_back(result.times.segmentation_ms);
     out.times.detection.push_back(result.times.detection_ms);

@@ -223,9 +223,10 @@ class Schema {
            "a valley window splits a cluster when its coverage is at most this fraction of the "
            "smaller of the highest windows on either side");
     number("complete_range_m", d.complete_range_m, 0.0, 10.0,
-           "completion: a cell above or below a detection's cell in the same column joins the "
-           "detection when its range differs by at most this (m; the legs the segmentation left "
-           "where the ground behind them gave no range jump); 0 disables");
+           "completion: a cell of the ring above or below a detection's cell (same column or "
+           "one beside it) joins the detection when its range differs by at most this (m; the "
+           "legs the segmentation left where the ground behind them gave no range jump); 0 "
+           "disables");
     number("complete_margin_m", d.complete_margin_m, 0.0, 10.0,
            "completion: joining cells must lie inside the detection's box grown by this "
            "horizontally and above its top (m)");

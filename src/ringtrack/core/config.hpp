@@ -51,7 +51,7 @@ struct DetectionConfig {
                                        // axis) are split at a density valley; 0 = no splitting
   double split_bin_m{0.1};             // width of the split's sliding window along the axis
   double split_valley_ratio{0.5};      // a valley splits at coverage <= this * the smaller peak
-  double complete_range_m{0.3};   // completion: column neighbours within this range join (0 = off)
+  double complete_range_m{0.3};   // completion: ring neighbours within this range join (0 = off)
   double complete_margin_m{0.2};  // ... inside the box grown by this (horizontally and on top)
 };
 
@@ -96,16 +96,16 @@ struct TrackingConfig {
   double vertical_position_noise{0.5};       // constant_position: z random-walk density (m^2/s)
   double initial_velocity_stddev_mps{1.5};   // velocity prior of a new hypothesis
   double measurement_covariance_scale{0.5};  // detection covariance times this: association R
-  double centroid_noise_m{0.05};   // filter update noise: centroid standard error (+) this per axis
+  double centroid_noise_m{0.05};  // filter update noise: centroid standard error (+) this per axis
   ReportedPosition reported_position{ReportedPosition::kMeasured};  // what outputs list
-  double few_point_stddev_m{0.2};  // association: horizontal std floor of 1-2-point detections
+  double few_point_stddev_m{0.2};      // association: horizontal std floor of 1-2-point detections
   double reassociate_distance_m{0.5};  // second pass: leftovers this close (horizontally) pair
   double delete_eigenvalue_m2{1.0};    // delete when a position-covariance eigenvalue exceeds this
   double merge_distance_m{0.3};        // younger hypotheses this close to older ones are deleted
   double few_point_merge_distance_m{0.6};  // ... this close when both were last measured by <= 2
                                            // points (far people)
-  double min_speed_kmh{1.0};           // reported speeds up to this are reported as zero
-  double max_speed_kmh{15.0};          // speeds are capped here (state and report)
+  double min_speed_kmh{1.0};               // reported speeds up to this are reported as zero
+  double max_speed_kmh{15.0};              // speeds are capped here (state and report)
   double dynamic_min_distance_m{1.5};  // besides disjoint footprints, the centre must move this far
   int dynamic_confirm_scans{5};        // ... in this many consecutive strict detections
   int rest_scans_to_static{30};  // dynamic hypotheses at rest this long turn static (0 = never)

@@ -205,7 +205,8 @@ const FilterResult& DynamicObjectFilter::process(
       continue;
     }
     // The object's cells: the detector's and those the completion added (its legs).
-    for (const auto* cells : {&detections[h.detection].indices, &detections[h.detection].completion}) {
+    for (const auto* cells :
+         {&detections[h.detection].indices, &detections[h.detection].completion}) {
       for (const auto cell : *cells) {
         if (cell >= point_of_cell_.size() || point_of_cell_[cell] < 0) continue;
         const auto p = static_cast<std::size_t>(point_of_cell_[cell]);

@@ -426,10 +426,10 @@ void Tracker::delete_merged() {
       if (doomed[i]) continue;
       const auto& old = hypotheses_[i];
       const double horizontal = (young.position() - old.position()).head<2>().norm();
-      const double reach = young.last_detection.points <= kFewPoints &&
-                                   old.last_detection.points <= kFewPoints
-                               ? few_point_reach
-                               : r;
+      const double reach =
+          young.last_detection.points <= kFewPoints && old.last_detection.points <= kFewPoints
+              ? few_point_reach
+              : r;
       if (horizontal < reach && vertical_gap(young.box, old.box) < reach) {
         doomed[j] = 1;
         break;
@@ -463,8 +463,9 @@ void Tracker::set_reported_position(Hypothesis& h) const {
   // The filter smooths the centroid over scans, so it lags a walker that turns or changes pace
   // and its height follows the rings only slowly; the detection's centroid is where this scan
   // shows the object, with the cells the completion added (the evaluation's ground truth is
-  // the centroid of all the object's hit points: docs/tracking.md, "Reported position"). The filter still drives association and prediction, and a missed
-  // hypothesis has nothing better than its prediction.
+  // the centroid of all the object's hit points: docs/tracking.md, "Reported position"). The filter
+  // still drives association and prediction, and a missed hypothesis has nothing better than its
+  // prediction.
   const bool measured = h.detection >= 0;
   h.reported_position = measured && config_.reported_position == core::ReportedPosition::kMeasured
                             ? h.last_detection.object_centroid.cast<double>()

@@ -17,13 +17,13 @@ namespace ringtrack::tracking {
 
 /// What a hypothesis keeps of the last detection assigned to it.
 struct DetectionSummary {
-  Eigen::Vector3f centroid{Eigen::Vector3f::Zero()};        ///< world frame
+  Eigen::Vector3f centroid{Eigen::Vector3f::Zero()};         ///< world frame
   Eigen::Vector3f object_centroid{Eigen::Vector3f::Zero()};  ///< with the completion (world)
-  Eigen::Matrix3f covariance{Eigen::Matrix3f::Identity()};  ///< as the detector gave it
-  core::Box3 box;                                           ///< world frame
-  std::size_t points{0};                                    ///< number of grid cells
-  bool relaxed{false};                                      ///< from the relaxed object model
-  std::int64_t stamp_ns{0};                                 ///< scan it came from
+  Eigen::Matrix3f covariance{Eigen::Matrix3f::Identity()};   ///< as the detector gave it
+  core::Box3 box;                                            ///< world frame
+  std::size_t points{0};                                     ///< number of grid cells
+  bool relaxed{false};                                       ///< from the relaxed object model
+  std::int64_t stamp_ns{0};                                  ///< scan it came from
 };
 
 /// One tracked object.
@@ -59,8 +59,9 @@ struct Hypothesis {
   int detection{-1};          ///< index of the detection assigned this scan, -1 when none
   DetectionSummary last_detection;  ///< the most recent assigned detection
 
-  Eigen::Vector3d reported_position{Eigen::Vector3d::Zero()};  ///< what outputs list (world, m):
-                                      ///< tracking.reported_position, set by every update
+  Eigen::Vector3d reported_position{
+      Eigen::Vector3d::Zero()};  ///< what outputs list (world, m):
+                                 ///< tracking.reported_position, set by every update
 
   /// Position estimate of the filter (world, m): association, prediction, deletion use it.
   [[nodiscard]] Eigen::Vector3d position() const { return filter.position(); }

@@ -503,7 +503,8 @@ TEST(Tracker, TwoTracksOnOneFarPersonBecomeOne) {
   }
   ScriptRunner pair;
   for (int k = 0; k < 10; ++k) {
-    pair.step({{0, person_detection(at(10.0, 0.0), {})}, {1, person_detection(at(10.0, 0.45), {})}});
+    pair.step(
+        {{0, person_detection(at(10.0, 0.0), {})}, {1, person_detection(at(10.0, 0.45), {})}});
   }
   EXPECT_EQ(pair.tracker.hypotheses().size(), 2u);
   EXPECT_TRUE(pair.single_identity(0));
