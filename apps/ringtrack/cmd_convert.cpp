@@ -28,6 +28,7 @@ struct ConvertOptions {
   std::string format{"auto"};
   std::string model;
   std::string calibration;
+  std::string metadata;
   std::string return_selection{"auto"};
   std::string time_source{"host"};
   std::string encoding{"binary_compressed"};
@@ -58,6 +59,7 @@ void run_convert(const ConvertOptions& o) {
   options.topic = o.topic;
   options.ring_field = o.ring_field;
   options.calibration = o.calibration;
+  options.metadata = o.metadata;
   io::VelodyneSourceOptions& velodyne = options.velodyne;
   velodyne.decoder.model = o.model;
   velodyne.decoder.return_selection = io::parse_velodyne_return_selection(o.return_selection);
@@ -128,6 +130,8 @@ void register_convert(CLI::App& app) {
                   "clouds: vlp16 up to 16 rings)");
   cmd->add_option("--calibration", options->calibration,
                   "Hesai: the sensor's angle-correction CSV (channel, elevation, azimuth)");
+  cmd->add_option("--metadata", options->metadata,
+                  "Ouster: the sensor's metadata JSON (beam angles, data format)");
   cmd->add_option("--return", options->return_selection,
                   "which return fills a cell: auto | strongest | last");
   cmd->add_option("--cut-azimuth", options->cut_azimuth_deg,

@@ -46,6 +46,7 @@ struct RunOptions {
   std::string topic;
   std::string sensor;
   std::string calibration;
+  std::string metadata;
   std::string poses;
   std::string poses_format{"tum"};
   bool filtered_scans{false};
@@ -176,6 +177,7 @@ class RunInput {
     source_options.topic = o.topic;
     source_options.velodyne.decoder.model = o.sensor;
     source_options.calibration = o.calibration;
+    source_options.metadata = o.metadata;
     source_options.velodyne.interrupt = &g_interrupted;
     source_ = io::open_scan_source(o.input, source_options);
     if (!o.poses.empty()) {
@@ -379,6 +381,8 @@ void register_run(CLI::App& app) {
       "Pandar40P | Pandar64 | PandarQT64 | PandarXT16 | PandarXT32 (ringtrack sensors)");
   cmd->add_option("--calibration", o->calibration,
                   "Hesai: the sensor's angle-correction CSV (channel, elevation, azimuth)");
+  cmd->add_option("--metadata", o->metadata,
+                  "Ouster: the sensor's metadata JSON (beam angles, data format)");
   cmd->add_option("--out", o->out, "output folder (created)")->required();
   cmd->add_option("--poses", o->poses,
                   "sensor poses (sensor in world; replaces a sequence's poses.txt)")

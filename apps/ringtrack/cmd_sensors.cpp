@@ -23,6 +23,9 @@ void list_sensors() {
                 f.columns_at_10hz, f.default_min_range_m, f.default_max_range_m,
                 "the packet header and size; --calibration FILE (docs/hesai.md)");
   }
+  std::printf("%-12s %-9s %5s %8s  %5.2f..%-6.0f %s\n", "OS0/OS1/OS2", "Ouster", "32-128",
+              "512-2048", 0.3, 250.0,
+              "--metadata FILE (the sensor's JSON: beams, columns, profile; docs/ouster.md)");
   std::printf("columns at 10 Hz; name a sensor with --sensor when the data does not say it\n");
 }
 

@@ -13,12 +13,15 @@
 namespace ringtrack::test {
 
 /// For every query point, the distance to the nearest point of `cloud` (infinity when `cloud` is
-/// empty). Cells of `cell_m`; rings of cells are searched outwards until no closer point can
-/// exist, so results are exact (the same as a brute-force search).
+/// empty) and, when `nearest` is given, that point's index. Cells of `cell_m`; rings of cells are
+/// searched outwards until no closer point can exist, so results are exact (the same as a
+/// brute-force search).
 inline std::vector<double> nearest_distances(const std::vector<Eigen::Vector3d>& cloud,
                                              const std::vector<Eigen::Vector3d>& queries,
-                                             double cell_m = 0.1) {
+                                             double cell_m = 0.1,
+                                             std::vector<std::size_t>* nearest = nullptr) {
   std::vector<double> out(queries.size(), std::numeric_limits<double>::infinity());
+  if (nearest != nullptr) nearest->assign(queries.size(), 0);
   if (cloud.empty()) return out;
   const auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
     return (static_cast<std::uint64_t>(x & 0x1FFFFF) << 42) |
@@ -38,6 +41,7 @@ inline std::vector<double> nearest_distances(const std::vector<Eigen::Vector3d>&
     const auto& p = queries[q];
     const std::int64_t cx = cell(p.x()), cy = cell(p.y()), cz = cell(p.z());
     double best2 = std::numeric_limits<double>::infinity();
+    std::size_t best_i = 0;
     for (int ring = 0; ring <= max_ring; ++ring) {
       // Every point in ring k lies at least (k - 1) cells away.
       if (ring > 0) {
@@ -52,13 +56,18 @@ inline std::vector<double> nearest_distances(const std::vector<Eigen::Vector3d>&
             const auto it = grid.find(key(cx + dx, cy + dy, cz + dz));
             if (it == grid.end()) continue;
             for (const std::uint32_t i : it->second) {
-              best2 = std::min(best2, (cloud[i] - p).squaredNorm());
+              const double d2 = (cloud[i] - p).squaredNorm();
+              if (d2 < best2) {
+                best2 = d2;
+                best_i = i;
+              }
             }
           }
         }
       }
     }
     out[q] = std::sqrt(best2);
+    if (nearest != nullptr) (*nearest)[q] = best_i;
   }
   return out;
 }

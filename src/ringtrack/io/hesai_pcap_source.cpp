@@ -7,7 +7,23 @@ namespace ringtrack::io {
 
 HesaiPcapSource::HesaiPcapSource(const std::filesystem::path& path, std::uint16_t data_port,
                                  sensors::hesai::HesaiDecoderOptions options, bool allow_truncated)
-    : reader_(path, allow_truncated), port_(data_port), decoder_(std::move(options)) {}
+    : reader_(path, allow_truncated), port_(data_port), decoder_(options) {
+  // The first data packet must fit the named model and the calibration: found here, before a
+  // front end creates any output, rather than at the first next().
+  PcapReader probe(path, true);
+  UdpDatagram datagram;
+  while (probe.next(datagram)) {
+    if (datagram.dst_port != port_) continue;
+    sensors::hesai::HesaiDecoder check(options);
+    try {
+      check.add_packet(datagram.payload, datagram.stamp_ns);
+    } catch (const core::InputError& e) {
+      throw core::InputError(reader_.path() + " (frame " + std::to_string(datagram.frame) +
+                             "): " + e.what());
+    }
+    break;
+  }
+}
 
 std::optional<core::OrganizedScan> HesaiPcapSource::next() {
   if (auto scan = decoder_.pop_scan()) return scan;

@@ -4,6 +4,7 @@
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/hesai_pcap_source.hpp"
+#include "ringtrack/io/ouster_pcap_source.hpp"
 #include "ringtrack/io/rosbag1_reader.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
@@ -80,6 +81,15 @@ std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
       options.format == ScanInputFormat::kAuto ? guess_scan_input_format(input) : options.format;
   switch (format) {
     case ScanInputFormat::kPcap:
+      if (!options.metadata.empty()) {
+        return std::make_unique<OusterPcapSource>(
+            input, sensors::ouster::read_ouster_metadata(options.metadata));
+      }
+      if (pcap_holds_ouster(input)) {
+        throw core::InputError(input +
+                               ": Ouster lidar packets (port 7502); give the sensor's metadata "
+                               "JSON with --metadata FILE");
+      }
       if (is_hesai_model_name(options.velodyne.decoder.model) ||
           pcap_holds_hesai(input, options.velodyne.pcap.data_port)) {
         if (options.calibration.empty()) {

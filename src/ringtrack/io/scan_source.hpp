@@ -35,6 +35,8 @@ struct ScanSourceOptions {
   std::string ring_field{"ring"};  ///< bags with PointCloud2: the ring field's name
   /// Hesai inputs: the sensor's angle-correction CSV (required for them).
   std::string calibration;
+  /// Ouster inputs: the sensor's metadata JSON (required for them).
+  std::string metadata;
 };
 
 /// Parses a format name: auto, pcap (pcapng), udp, bag (rosbag, rosbag1, ros1), rosbag2 (bag2,
