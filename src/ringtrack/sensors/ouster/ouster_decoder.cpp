@@ -35,6 +35,30 @@ std::size_t first_pixel(const OusterMetadata& m) {
   return m.profile == OusterProfile::kLegacy ? 16 : 12;
 }
 
+// Reads one pixel of the profile at q.
+inline void read_pixel(const std::uint8_t* q, OusterProfile profile, OusterPixel& px) {
+  switch (profile) {
+    case OusterProfile::kLegacy:  // range 20 bits (mm), reflectivity u16, signal, NIR, unused
+      px.range_mm = le32(q) & 0xFFFFFu;
+      px.reflectivity = le16(q + 4);
+      break;
+    case OusterProfile::kRng19Rfl8Sig16Nir16:  // range 19 bits, reflectivity u8, signal, NIR
+      px.range_mm = le32(q) & 0x7FFFFu;
+      px.reflectivity = q[4];
+      break;
+    case OusterProfile::kRng19Rfl8Sig16Nir16Dual:  // (range 19 bits, reflectivity in bits 24..31)
+                                                   // x 2, signal x 2, NIR
+      px.range_mm = le32(q) & 0x7FFFFu;
+      px.reflectivity = q[3];
+      px.range2_mm = le32(q + 4) & 0x7FFFFu;
+      break;
+    case OusterProfile::kRng15Rfl8Nir8:  // range 15 bits in 8 mm units, reflectivity u8, NIR u8
+      px.range_mm = (le16(q) & 0x7FFFu) * 8u;
+      px.reflectivity = q[2];
+      break;
+  }
+}
+
 }  // namespace
 
 OusterPixel ouster_pixel(std::span<const std::uint8_t> packet, const OusterMetadata& metadata,
@@ -42,26 +66,7 @@ OusterPixel ouster_pixel(std::span<const std::uint8_t> packet, const OusterMetad
   const std::uint8_t* p = packet.data() + column_offset(metadata, column) + first_pixel(metadata) +
                           static_cast<std::size_t>(beam) * metadata.pixel_bytes();
   OusterPixel px;
-  switch (metadata.profile) {
-    case OusterProfile::kLegacy:  // range 20 bits (mm), reflectivity u16, signal, NIR, unused
-      px.range_mm = le32(p) & 0xFFFFFu;
-      px.reflectivity = le16(p + 4);
-      break;
-    case OusterProfile::kRng19Rfl8Sig16Nir16:  // range 19 bits, reflectivity u8, signal, NIR
-      px.range_mm = le32(p) & 0x7FFFFu;
-      px.reflectivity = p[4];
-      break;
-    case OusterProfile::kRng19Rfl8Sig16Nir16Dual:  // (range 19 bits, reflectivity in bits 24..31)
-                                                   // x 2, signal x 2, NIR
-      px.range_mm = le32(p) & 0x7FFFFu;
-      px.reflectivity = p[3];
-      px.range2_mm = le32(p + 4) & 0x7FFFFu;
-      break;
-    case OusterProfile::kRng15Rfl8Nir8:  // range 15 bits in 8 mm units, reflectivity u8, NIR u8
-      px.range_mm = (le16(p) & 0x7FFFu) * 8u;
-      px.reflectivity = p[2];
-      break;
-  }
+  read_pixel(p, metadata.profile, px);
   return px;
 }
 
@@ -94,6 +99,19 @@ OusterDecoder::OusterDecoder(OusterMetadata metadata, OusterDecoderOptions optio
   rotation_ = {t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]};
   translation_mm_ = {t[3], t[7], t[11]};
   yaw_rad_ = std::atan2(t[4], t[0]);
+  // Per (measurement id, beam): the point is linear in the range, p = range * direction +
+  // offset (the formula of point() with the transform folded in), so decoding is 3 FMAs.
+  lut_direction_.resize(static_cast<std::size_t>(w) * beams);
+  lut_offset_.resize(lut_direction_.size());
+  for (int m = 0; m < w; ++m) {
+    for (std::size_t b = 0; b < beams; ++b) {
+      const Eigen::Vector3d at0 = point(static_cast<int>(b), m, 0.0);
+      const Eigen::Vector3d at1 = point(static_cast<int>(b), m, 1000.0);  // 1 m
+      const std::size_t k = static_cast<std::size_t>(m) * beams + b;
+      lut_direction_[k] = (at1 - at0).cast<float>();
+      lut_offset_[k] = at0.cast<float>();
+    }
+  }
 }
 
 Eigen::Vector3d OusterDecoder::point(int beam, int measurement_id, double range_mm) const {
@@ -115,7 +133,13 @@ Eigen::Vector3d OusterDecoder::point(int beam, int measurement_id, double range_
 }
 
 void OusterDecoder::start_frame(int frame_id) {
-  scan_.emplace(model_.rings(), model_.columns());
+  if (spare_ && spare_->rings() == model_.rings() && spare_->columns() == model_.columns()) {
+    scan_ = std::move(spare_);
+    spare_.reset();
+    scan_->reset();
+  } else {
+    scan_.emplace(model_.rings(), model_.columns());
+  }
   stamps_.assign(static_cast<std::size_t>(metadata_.columns_per_frame), 0);
   seen_.assign(static_cast<std::size_t>(metadata_.columns_per_frame), 0);
   frame_id_ = frame_id;
@@ -163,13 +187,18 @@ void OusterDecoder::add_packet(std::span<const std::uint8_t> payload, std::int64
     }
     seen_[static_cast<std::size_t>(m)] = 1;
     stamps_[static_cast<std::size_t>(m)] = stamp;
-    for (int b = 0; b < beams; ++b) {
-      const OusterPixel px = ouster_pixel(payload, metadata_, col, b);
+    const std::uint8_t* q = block + first_pixel(metadata_);
+    const std::size_t stride = metadata_.pixel_bytes();
+    const std::size_t lut = static_cast<std::size_t>(m) * static_cast<std::size_t>(beams);
+    for (int b = 0; b < beams; ++b, q += stride) {
+      OusterPixel px;
+      read_pixel(q, metadata_.profile, px);
       if (px.range_mm == 0) continue;
       // Destaggered: the beam's pixel moves by its shift so that a column holds one direction.
-      const int c = (m + metadata_.pixel_shift_by_row[static_cast<std::size_t>(b)]) % w;
+      int c = m + metadata_.pixel_shift_by_row[static_cast<std::size_t>(b)];
+      if (c >= w) c -= w;
       const int ring = ring_of_beam_[static_cast<std::size_t>(b)];
-      const auto range = static_cast<float>(px.range_mm * 1e-3);
+      const float range = static_cast<float>(px.range_mm) * 1e-3f;
       if (range < min_range) {
         scan.set_invalid(ring, c, core::ReturnStatus::kTooClose);
         continue;
@@ -178,8 +207,9 @@ void OusterDecoder::add_packet(std::span<const std::uint8_t> payload, std::int64
         scan.set_invalid(ring, c, core::ReturnStatus::kTooFar);
         continue;
       }
+      const std::size_t k = lut + static_cast<std::size_t>(b);
       scan.set_return(ring, c, range, static_cast<float>(px.reflectivity),
-                      point(b, m, static_cast<double>(px.range_mm)).cast<float>());
+                      lut_direction_[k] * range + lut_offset_[k]);
     }
   }
   ++stats_.decoded_packets;
@@ -194,6 +224,7 @@ void OusterDecoder::finish_frame() {
   }
   if (missing > 0 && !options_.keep_partial_scans) {
     ++stats_.partial_scans_dropped;
+    spare_ = std::move(scan_);  // its memory serves the next frame
     scan_.reset();
     return;
   }

@@ -57,6 +57,9 @@ class OusterDecoder {
   void add_packet(std::span<const std::uint8_t> payload, std::int64_t host_stamp_ns);
   /// The oldest completed scan, if any.
   std::optional<core::OrganizedScan> pop_scan();
+  /// Hands a scan back for reuse: the next frame is built in its memory (saves allocating and
+  /// page-faulting a fresh scan per frame).
+  void recycle(core::OrganizedScan&& used) { spare_ = std::move(used); }
   /// Ends the stream: emits the frame in progress when complete (or with keep_partial_scans).
   void finish();
 
@@ -83,8 +86,10 @@ class OusterDecoder {
   std::array<double, 9> rotation_{};
   std::array<double, 3> translation_mm_{};
   double yaw_rad_{0};
+  std::vector<Eigen::Vector3f> lut_direction_, lut_offset_;  // per (measurement id, beam)
 
   std::optional<core::OrganizedScan> scan_;
+  std::optional<core::OrganizedScan> spare_;
   std::vector<std::int64_t> stamps_;  // per measurement id of the frame in progress
   std::vector<std::uint8_t> seen_;    // per measurement id
   int frame_id_{-1};
