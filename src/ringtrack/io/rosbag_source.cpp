@@ -110,6 +110,26 @@ RosbagScanSource::RosbagScanSource(std::unique_ptr<RosbagReader> reader,
       }
       options.hesai.calibration = sensors::hesai::read_hesai_calibration(options.calibration_path);
     }
+    // The first packet must fit the calibration (and a named model): found here, before a
+    // front end creates any output, rather than at the first next().
+    {
+      auto probe = open_rosbag(reader_->path());
+      probe->select_topic(topic_.name);
+      RosbagMessage message;
+      if (probe->next(message)) {
+        const std::string at = probe->current_file().string() + " (topic " + topic_.name +
+                               ", message " + std::to_string(message.index) + ")";
+        const auto packets = parse_pandar_scan(message.data, probe->serialization(), at);
+        if (!packets.empty()) {
+          sensors::hesai::HesaiDecoder check(options.hesai);
+          try {
+            check.add_packet(packets.front().data, packets.front().stamp_ns);
+          } catch (const core::InputError& e) {
+            throw core::InputError(at + ": " + e.what());
+          }
+        }
+      }
+    }
     hesai_.emplace(std::move(options.hesai));
   }
 }

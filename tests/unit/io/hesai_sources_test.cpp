@@ -104,6 +104,12 @@ TEST(HesaiSources, CliErrorsAreOneLine) {
   EXPECT_NE(r.err.find(wrong + ": 32 channels, but PandarXT16 packets have 16"), std::string::npos)
       << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(tmp.path() / "out"));
+  r = testing::run_command(kCli + " run " + (dir / "ros2_bag").string() + " --quiet --out " +
+                           (tmp.path() / "run0").string() + " --calibration " + wrong);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(tmp.path() / "run0")) << "an output was left behind";
   // A calibration file with a channel missing.
   const fs::path cut = tmp.path() / "cut.csv";
   {
