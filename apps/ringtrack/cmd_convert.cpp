@@ -27,6 +27,8 @@ struct ConvertOptions {
   std::string out;
   std::string format{"auto"};
   std::string model;
+  std::string calibration;
+  std::string metadata;
   std::string return_selection{"auto"};
   std::string time_source{"host"};
   std::string encoding{"binary_compressed"};
@@ -56,6 +58,8 @@ void run_convert(const ConvertOptions& o) {
   options.format = io::parse_scan_input_format(o.format);
   options.topic = o.topic;
   options.ring_field = o.ring_field;
+  options.calibration = o.calibration;
+  options.metadata = o.metadata;
   io::VelodyneSourceOptions& velodyne = options.velodyne;
   velodyne.decoder.model = o.model;
   velodyne.decoder.return_selection = io::parse_velodyne_return_selection(o.return_selection);
@@ -120,9 +124,14 @@ void register_convert(CLI::App& app) {
       ->required();
   cmd->add_option("--out", options->out, "sequence folder to write")->required();
   cmd->add_option("--format", options->format, "auto | pcap | udp | bag (ROS 1) | rosbag2");
-  cmd->add_option("--model", options->model,
-                  "vlp16 | vlp32c | hdl32e (default: from the packets' product byte; point "
+  cmd->add_option("--model,--sensor", options->model,
+                  "vlp16 | vlp32c | hdl32e | Pandar40P | Pandar64 | PandarQT64 | PandarXT16 | "
+                  "PandarXT32 (default: from the packets' product byte or Hesai header; point "
                   "clouds: vlp16 up to 16 rings)");
+  cmd->add_option("--calibration", options->calibration,
+                  "Hesai: the sensor's angle-correction CSV (channel, elevation, azimuth)");
+  cmd->add_option("--metadata", options->metadata,
+                  "Ouster: the sensor's metadata JSON (beam angles, data format)");
   cmd->add_option("--return", options->return_selection,
                   "which return fills a cell: auto | strongest | last");
   cmd->add_option("--cut-azimuth", options->cut_azimuth_deg,

@@ -44,6 +44,9 @@ struct RunOptions {
   std::string out;
   std::string format{"auto"};
   std::string topic;
+  std::string sensor;
+  std::string calibration;
+  std::string metadata;
   std::string poses;
   std::string poses_format{"tum"};
   bool filtered_scans{false};
@@ -172,6 +175,9 @@ class RunInput {
     io::ScanSourceOptions source_options;
     source_options.format = io::parse_scan_input_format(o.format);
     source_options.topic = o.topic;
+    source_options.velodyne.decoder.model = o.sensor;
+    source_options.calibration = o.calibration;
+    source_options.metadata = o.metadata;
     source_options.velodyne.interrupt = &g_interrupted;
     source_ = io::open_scan_source(o.input, source_options);
     if (!o.poses.empty()) {
@@ -369,6 +375,14 @@ void register_run(CLI::App& app) {
   cmd->add_option("--format", o->format,
                   "input format: auto (from the name), pcap, udp, rosbag1, rosbag2");
   cmd->add_option("--topic", o->topic, "bag topic (default: the first supported one)");
+  cmd->add_option(
+      "--sensor", o->sensor,
+      "sensor model when the packets do not say it: vlp16 | vlp32c | hdl32e | "
+      "Pandar40P | Pandar64 | PandarQT64 | PandarXT16 | PandarXT32 (ringtrack sensors)");
+  cmd->add_option("--calibration", o->calibration,
+                  "Hesai: the sensor's angle-correction CSV (channel, elevation, azimuth)");
+  cmd->add_option("--metadata", o->metadata,
+                  "Ouster: the sensor's metadata JSON (beam angles, data format)");
   cmd->add_option("--out", o->out, "output folder (created)")->required();
   cmd->add_option("--poses", o->poses,
                   "sensor poses (sensor in world; replaces a sequence's poses.txt)")

@@ -27,5 +27,6 @@ void register_eval(CLI::App& app);
 void register_simulate(CLI::App& app);
 void register_convert(CLI::App& app);
 void register_benchmark(CLI::App& app);
+void register_sensors(CLI::App& app);
 
 }  // namespace ringtrack::cli

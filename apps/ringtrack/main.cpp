@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   ringtrack::cli::register_simulate(app);
   ringtrack::cli::register_convert(app);
   ringtrack::cli::register_benchmark(app);
+  ringtrack::cli::register_sensors(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -22,7 +22,7 @@ struct VelodyneEncoderOptions {
 
 /// One echo as the packet stores it.
 struct VelodyneEcho {
-  std::uint16_t distance_raw{0};  ///< 2 mm units, 0 = no return
+  std::uint16_t distance_raw{0};  ///< 2 mm units (VLP-32C: 4 mm), 0 = no return
   std::uint8_t reflectivity{0};
 };
 

@@ -27,6 +27,18 @@ OrganizedScan::OrganizedScan(int rings, int columns) : rings_(rings), columns_(c
   column_stamp_ns.assign(static_cast<std::size_t>(columns), 0);
 }
 
+void OrganizedScan::reset() {
+  std::fill(range_m_.begin(), range_m_.end(), kNaN);
+  std::fill(intensity_.begin(), intensity_.end(), 0.0f);
+  std::fill(x_.begin(), x_.end(), kNaN);
+  std::fill(y_.begin(), y_.end(), kNaN);
+  std::fill(z_.begin(), z_.end(), kNaN);
+  std::fill(status_.begin(), status_.end(), ReturnStatus::kNoReturn);
+  std::fill(column_azimuth_rad.begin(), column_azimuth_rad.end(), 0.0);
+  std::fill(column_stamp_ns.begin(), column_stamp_ns.end(), 0);
+  stamp_ns = 0;
+}
+
 void OrganizedScan::set_return(int ring, int column, float range_m, float intensity,
                                const Eigen::Vector3f& xyz) {
   const auto i = index(ring, column);

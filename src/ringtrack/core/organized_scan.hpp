@@ -35,6 +35,10 @@ class OrganizedScan {
   [[nodiscard]] int ring_of(std::size_t i) const { return static_cast<int>(i / columns_); }
   [[nodiscard]] int column_of(std::size_t i) const { return static_cast<int>(i % columns_); }
 
+  /// Makes every cell invalid (kNoReturn) and zeroes the column data and stamp, keeping the
+  /// memory (for decoders that reuse a scan handed back by their consumer).
+  void reset();
+
   /// Stores a valid return with its sensor-frame coordinates.
   void set_return(int ring, int column, float range_m, float intensity, const Eigen::Vector3f& xyz);
   /// Marks a cell invalid (range and coordinates become NaN, intensity 0).

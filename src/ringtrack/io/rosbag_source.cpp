@@ -10,7 +10,7 @@ namespace {
 
 bool is_supported(const std::string& type) {
   const std::string t = normalize_ros_type(type);
-  return t == kVelodyneScanRosType || t == kPointCloud2RosType;
+  return t == kVelodyneScanRosType || t == kPointCloud2RosType || t == kPandarScanRosType;
 }
 
 std::string list_topics(const std::vector<RosbagTopicInfo>& topics) {
@@ -42,6 +42,26 @@ std::vector<VelodyneScanPacket> parse_velodyne_scan(std::span<const std::uint8_t
   return packets;
 }
 
+std::vector<PandarScanPacket> parse_pandar_scan(std::span<const std::uint8_t> message,
+                                                RosSerialization serialization,
+                                                const std::string& where) {
+  constexpr std::size_t kBuffer = 1500;
+  RosMessageCursor in(message, serialization, where + ": PandarScan");
+  in.header_stamp_ns();
+  const std::uint32_t count = in.sequence_length(8 + kBuffer + 4, "packets");
+  std::vector<PandarScanPacket> packets(count);
+  for (auto& p : packets) {
+    p.stamp_ns = in.time_ns();
+    const auto buffer = in.bytes(kBuffer);
+    const std::uint32_t size = in.u32();
+    if (size > kBuffer) {
+      in.fail("packet size " + std::to_string(size) + " (expected at most 1500)");
+    }
+    p.data = buffer.first(size);
+  }
+  return packets;
+}
+
 RosbagScanSource::RosbagScanSource(const std::filesystem::path& path, RosbagSourceOptions options)
     : RosbagScanSource(open_rosbag(path), std::move(options)) {}
 
@@ -58,7 +78,8 @@ RosbagScanSource::RosbagScanSource(std::unique_ptr<RosbagReader> reader,
                            [&](const RosbagTopicInfo& t) { return t.name == options.topic; });
     if (!is_supported(topic_.type)) {
       throw core::InputError(bag + ": topic " + topic_.name + " has type " + topic_.type +
-                             "; expected velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2");
+                             "; expected velodyne_msgs/VelodyneScan, pandar_msgs/PandarScan or "
+                             "sensor_msgs/PointCloud2");
     }
   } else {
     // The first supported topic that has messages, else the first supported one.
@@ -71,7 +92,8 @@ RosbagScanSource::RosbagScanSource(std::unique_ptr<RosbagReader> reader,
     }
     if (it == topics.end()) {
       throw core::InputError(bag +
-                             ": no velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2 topic "
+                             ": no velodyne_msgs/VelodyneScan, pandar_msgs/PandarScan or "
+                             "sensor_msgs/PointCloud2 topic "
                              "(topics: " +
                              list_topics(topics) + ")");
     }
@@ -79,6 +101,37 @@ RosbagScanSource::RosbagScanSource(std::unique_ptr<RosbagReader> reader,
     reader_->select_topic(topic_.name);
   }
   packets_topic_ = normalize_ros_type(topic_.type) == kVelodyneScanRosType;
+  if (normalize_ros_type(topic_.type) == kPandarScanRosType) {
+    if (options.hesai.calibration.channels() == 0) {
+      if (options.calibration_path.empty()) {
+        throw core::InputError(bag + ": topic " + topic_.name +
+                               " holds Hesai packets; give the sensor's angle-correction file "
+                               "with --calibration FILE");
+      }
+      options.hesai.calibration = sensors::hesai::read_hesai_calibration(options.calibration_path);
+    }
+    // The first packet must fit the calibration (and a named model): found here, before a
+    // front end creates any output, rather than at the first next().
+    {
+      auto probe = open_rosbag(reader_->path());
+      probe->select_topic(topic_.name);
+      RosbagMessage message;
+      if (probe->next(message)) {
+        const std::string at = probe->current_file().string() + " (topic " + topic_.name +
+                               ", message " + std::to_string(message.index) + ")";
+        const auto packets = parse_pandar_scan(message.data, probe->serialization(), at);
+        if (!packets.empty()) {
+          sensors::hesai::HesaiDecoder check(options.hesai);
+          try {
+            check.add_packet(packets.front().data, packets.front().stamp_ns);
+          } catch (const core::InputError& e) {
+            throw core::InputError(at + ": " + e.what());
+          }
+        }
+      }
+    }
+    hesai_.emplace(std::move(options.hesai));
+  }
 }
 
 std::string RosbagScanSource::where(std::uint64_t index) const {
@@ -88,6 +141,32 @@ std::string RosbagScanSource::where(std::uint64_t index) const {
 
 std::optional<core::OrganizedScan> RosbagScanSource::next() {
   RosbagMessage message;
+  if (hesai_) {
+    if (auto scan = hesai_->pop_scan()) return scan;
+    while (!finished_) {
+      if (!reader_->next(message)) {
+        finished_ = true;
+        if (hesai_->stats().decoded_packets == 0) {
+          throw core::InputError(reader_->path().string() + ": no decodable Hesai packets on " +
+                                 topic_.name + " (" + std::to_string(stats_.messages) +
+                                 " messages, " + std::to_string(stats_.packets) + " packets)");
+        }
+        hesai_->finish();
+        break;
+      }
+      ++stats_.messages;
+      const std::string at = where(message.index);
+      const auto packets = parse_pandar_scan(message.data, reader_->serialization(), at);
+      stats_.packets += packets.size();
+      try {
+        for (const auto& p : packets) hesai_->add_packet(p.data, p.stamp_ns);
+      } catch (const core::InputError& e) {
+        throw core::InputError(at + ": " + e.what());
+      }
+      if (auto scan = hesai_->pop_scan()) return scan;
+    }
+    return hesai_->pop_scan();
+  }
   if (!packets_topic_) {
     while (!finished_) {
       if (!reader_->next(message)) {
@@ -133,6 +212,7 @@ std::optional<core::OrganizedScan> RosbagScanSource::next() {
 }
 
 const core::SensorModel& RosbagScanSource::model() const {
+  if (hesai_) return hesai_->model();
   return packets_topic_ ? decoder_.model() : organizer_.model();
 }
 
@@ -142,7 +222,15 @@ std::string RosbagScanSource::summary() const {
   const auto add = [&line](const char* what, std::uint64_t n) {
     if (n > 0) line += ", " + std::to_string(n) + " " + what;
   };
-  if (packets_topic_) {
+  if (hesai_) {
+    const auto& d = hesai_->stats();
+    line += ", " + std::to_string(d.decoded_packets) + " Hesai packets decoded, " +
+            std::to_string(d.scans) + " scans";
+    add("skipped packets", d.skipped_packets());
+    add("lost firing blocks", d.lost_blocks);
+    add("invalid columns", d.invalid_columns);
+    add("partial scans dropped", d.partial_scans_dropped);
+  } else if (packets_topic_) {
     const auto& d = decoder_.stats();
     line += ", " + std::to_string(d.decoded_packets) + " data packets decoded, " +
             std::to_string(d.scans) + " scans";

@@ -1,6 +1,7 @@
 #pragma once
 /// Organized scans from ROS bags (ROS 1 .bag or rosbag2): velodyne_msgs/VelodyneScan topics
-/// through the Velodyne decoder, sensor_msgs/PointCloud2 topics through PointCloud2Organizer.
+/// through the Velodyne decoder, pandar_msgs/PandarScan through the Hesai decoder,
+/// sensor_msgs/PointCloud2 topics through PointCloud2Organizer.
 
 #include <cstdint>
 #include <filesystem>
@@ -15,11 +16,14 @@
 #include "ringtrack/io/rosbag_reader.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/io/velodyne_source.hpp"
+#include "ringtrack/sensors/hesai/hesai_decoder.hpp"
 
 namespace ringtrack::io {
 
 /// velodyne_msgs/VelodyneScan (type name without "/msg/").
 inline constexpr const char* kVelodyneScanRosType = "velodyne_msgs/VelodyneScan";
+/// pandar_msgs/PandarScan (type name without "/msg/"): Hesai packets.
+inline constexpr const char* kPandarScanRosType = "pandar_msgs/PandarScan";
 /// sensor_msgs/PointCloud2 (type name without "/msg/").
 inline constexpr const char* kPointCloud2RosType = "sensor_msgs/PointCloud2";
 
@@ -36,11 +40,27 @@ std::vector<VelodyneScanPacket> parse_velodyne_scan(std::span<const std::uint8_t
                                                     RosSerialization serialization,
                                                     const std::string& where);
 
+/// One packet of a pandar_msgs/PandarScan message.
+struct PandarScanPacket {
+  std::int64_t stamp_ns{0};            ///< the packet's stamp
+  std::span<const std::uint8_t> data;  ///< its `size` bytes of the uint8[1500] buffer
+};
+
+/// Parses a serialized pandar_msgs/PandarScan (Header, then PandarPacket[] of {time stamp,
+/// uint8[1500] data, uint32 size}); throws core::InputError naming `where`, the byte offset and
+/// what was expected (also for a size above 1500).
+std::vector<PandarScanPacket> parse_pandar_scan(std::span<const std::uint8_t> message,
+                                                RosSerialization serialization,
+                                                const std::string& where);
+
 /// What to read from a bag and how.
 struct RosbagSourceOptions {
   std::string topic;  ///< "" = the first topic of a supported type (in the bag's order)
   VelodyneDecoderOptions decoder;  ///< for VelodyneScan topics
   PointCloud2Options cloud;        ///< for PointCloud2 topics
+  /// For PandarScan topics (its calibration, or calibration_path, is required there).
+  sensors::hesai::HesaiDecoderOptions hesai;
+  std::string calibration_path;  ///< read into hesai.calibration when that is empty
 };
 
 /// Counters of a bag source.
@@ -69,8 +89,12 @@ class RosbagScanSource final : public VelodyneScanSource {
 
   /// The chosen topic.
   [[nodiscard]] const RosbagTopicInfo& topic() const { return topic_; }
-  /// True for a VelodyneScan topic, false for PointCloud2.
+  /// True for a VelodyneScan topic.
   [[nodiscard]] bool velodyne_packets() const { return packets_topic_; }
+  /// The Hesai decoder of a PandarScan topic (nullptr otherwise).
+  [[nodiscard]] const sensors::hesai::HesaiDecoder* hesai_decoder() const {
+    return hesai_ ? &*hesai_ : nullptr;
+  }
   /// The bag reader.
   [[nodiscard]] const RosbagReader& reader() const { return *reader_; }
   /// The packet decoder (VelodyneScan topics).
@@ -88,6 +112,7 @@ class RosbagScanSource final : public VelodyneScanSource {
   bool packets_topic_{false};
   VelodyneDecoder decoder_;
   PointCloud2Organizer organizer_;
+  std::optional<sensors::hesai::HesaiDecoder> hesai_;
   RosbagSourceStats stats_;
   bool finished_{false};
 };

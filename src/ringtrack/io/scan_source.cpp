@@ -3,10 +3,14 @@
 #include <filesystem>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/hesai_pcap_source.hpp"
+#include "ringtrack/io/ouster_pcap_source.hpp"
 #include "ringtrack/io/rosbag1_reader.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
 #include "ringtrack/io/rosbag_source.hpp"
+#include "ringtrack/sensors/hesai/hesai_calibration.hpp"
+#include "ringtrack/sensors/hesai/hesai_format.hpp"
 
 namespace ringtrack::io {
 
@@ -41,12 +45,65 @@ ScanInputFormat guess_scan_input_format(const std::string& input) {
                          "--format");
 }
 
+bool is_hesai_model_name(const std::string& name) {
+  return !name.empty() && sensors::hesai::hesai_format_by_name(name) != nullptr;
+}
+
+namespace {
+
+// Hesai decoder options from the shared ones: the model name, return, cut and rate.
+sensors::hesai::HesaiDecoderOptions hesai_options(const ScanSourceOptions& options) {
+  const VelodyneDecoderOptions& v = options.velodyne.decoder;
+  sensors::hesai::HesaiDecoderOptions h;
+  h.model = is_hesai_model_name(v.model) ? v.model : "";
+  switch (v.return_selection) {
+    case VelodyneReturnSelection::kAuto:
+      h.return_selection = sensors::hesai::HesaiReturnSelection::kAuto;
+      break;
+    case VelodyneReturnSelection::kStrongest:
+      h.return_selection = sensors::hesai::HesaiReturnSelection::kStrongest;
+      break;
+    case VelodyneReturnSelection::kLast:
+      h.return_selection = sensors::hesai::HesaiReturnSelection::kLast;
+      break;
+  }
+  h.cut_azimuth_deg = v.cut_azimuth_deg;
+  h.scan_rate_hz = v.scan_rate_hz;
+  h.keep_partial_scans = v.keep_partial_scans;
+  return h;
+}
+
+}  // namespace
+
 std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
                                              const ScanSourceOptions& options) {
   const ScanInputFormat format =
       options.format == ScanInputFormat::kAuto ? guess_scan_input_format(input) : options.format;
   switch (format) {
     case ScanInputFormat::kPcap:
+      if (!options.metadata.empty()) {
+        return std::make_unique<OusterPcapSource>(
+            input, sensors::ouster::read_ouster_metadata(options.metadata));
+      }
+      if (pcap_holds_ouster(input)) {
+        throw core::InputError(input +
+                               ": Ouster lidar packets (port 7502); give the sensor's metadata "
+                               "JSON with --metadata FILE");
+      }
+      if (is_hesai_model_name(options.velodyne.decoder.model) ||
+          pcap_holds_hesai(input, options.velodyne.pcap.data_port)) {
+        if (options.calibration.empty()) {
+          throw core::InputError(input +
+                                 ": Hesai packets; give the sensor's angle-correction file with "
+                                 "--calibration FILE");
+        }
+        auto h = hesai_options(options);
+        h.calibration = sensors::hesai::read_hesai_calibration(options.calibration);
+        return std::make_unique<HesaiPcapSource>(input, options.velodyne.pcap.data_port,
+                                                 std::move(h),
+                                                 options.velodyne.pcap.allow_truncated);
+      }
+      [[fallthrough]];
     case ScanInputFormat::kUdp: {
       VelodyneSourceOptions v = options.velodyne;
       v.format =
@@ -58,7 +115,12 @@ std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
       RosbagSourceOptions b;
       b.topic = options.topic;
       b.decoder = options.velodyne.decoder;
-      b.cloud.model = options.velodyne.decoder.model;
+      if (is_hesai_model_name(b.decoder.model)) b.decoder.model.clear();
+      b.hesai = hesai_options(options);
+      b.calibration_path = options.calibration;
+      b.cloud.model = is_hesai_model_name(options.velodyne.decoder.model)
+                          ? std::string()
+                          : options.velodyne.decoder.model;
       b.cloud.scan_rate_hz = options.velodyne.decoder.scan_rate_hz;
       b.cloud.cut_azimuth_deg = options.velodyne.decoder.cut_azimuth_deg;
       b.cloud.ring_field = options.ring_field;

@@ -1,6 +1,8 @@
 #pragma once
-/// Opens any scan input by name: Velodyne pcap/pcapng files and live UDP (velodyne_source.hpp),
-/// ROS 1 bags and ROS 2 bags (VelodyneScan or PointCloud2 topics). See docs/inputs.md.
+/// Opens any scan input by name: Velodyne or Hesai pcap/pcapng files, live Velodyne UDP
+/// (velodyne_source.hpp), ROS 1 bags and ROS 2 bags (VelodyneScan, PandarScan or PointCloud2
+/// topics). The sensor is recognised from the packets (Velodyne factory bytes, Hesai header) or
+/// named (`velodyne.decoder.model`). See docs/inputs.md and docs/hesai.md.
 
 #include <memory>
 #include <string>
@@ -31,6 +33,10 @@ struct ScanSourceOptions {
   VelodyneSourceOptions velodyne;
   std::string topic;               ///< bags: the topic (default: the first supported one)
   std::string ring_field{"ring"};  ///< bags with PointCloud2: the ring field's name
+  /// Hesai inputs: the sensor's angle-correction CSV (required for them).
+  std::string calibration;
+  /// Ouster inputs: the sensor's metadata JSON (required for them).
+  std::string metadata;
 };
 
 /// Parses a format name: auto, pcap (pcapng), udp, bag (rosbag, rosbag1, ros1), rosbag2 (bag2,
@@ -38,6 +44,8 @@ struct ScanSourceOptions {
 ScanInputFormat parse_scan_input_format(const std::string& name);
 /// The format an input implies; throws core::InputError when it cannot tell.
 ScanInputFormat guess_scan_input_format(const std::string& input);
+/// True when a sensor name is a Hesai model (sensors/hesai).
+bool is_hesai_model_name(const std::string& name);
 /// Opens an input; throws core::InputError / core::ConfigError naming it.
 std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
                                              const ScanSourceOptions& options);

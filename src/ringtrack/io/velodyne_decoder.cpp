@@ -368,7 +368,7 @@ void VelodyneDecoder::fill_column(int column, const VelodyneSequence& seq, std::
     const int raw = read_u16(rec);
     if (raw == 0) continue;  // a new scan's cells start as kNoReturn
     const int ring = ring_of_laser_[l];
-    const auto range = static_cast<float>(raw * kVelodyneDistanceUnitM);
+    const auto range = static_cast<float>(raw * layout_.distance_unit_m);
     if (range < min_range) {
       scan.set_invalid(ring, column, core::ReturnStatus::kTooClose);
       continue;

@@ -104,6 +104,8 @@ VelodyneLayout VelodyneLayout::of(const core::SensorModel& model) {
   layout.lasers = model.rings();
   layout.sequences_per_block = model.rings() == 16 ? 2 : 1;
   layout.sequence_us = model.firing_sequence_us;
+  // The VLP-32C reports distances in 4 mm units, the VLP-16 and HDL-32E in 2 mm units.
+  layout.distance_unit_m = model.name == "VLP-32C" ? kVlp32cDistanceUnitM : kVelodyneDistanceUnitM;
   if (model.rings() != 16 && model.rings() != 32) {
     throw core::InputError("velodyne: model " + model.name + " has " +
                            std::to_string(model.rings()) + " rings; expected 16 or 32");
@@ -195,6 +197,7 @@ VelodynePacketStatus parse_velodyne_packet(std::span<const std::uint8_t> payload
 void append_velodyne_points(const VelodyneParsedPacket& packet, const core::SensorModel& model,
                             std::vector<VelodynePoint>& out) {
   const int lasers = model.rings();
+  const double unit_m = VelodyneLayout::of(model).distance_unit_m;
   std::vector<int> ring_of_laser(static_cast<std::size_t>(lasers));
   for (int r = 0; r < lasers; ++r) {
     ring_of_laser[static_cast<std::size_t>(model.laser_of_ring[static_cast<std::size_t>(r)])] = r;
@@ -222,7 +225,7 @@ void append_velodyne_points(const VelodyneParsedPacket& packet, const core::Sens
           p.laser = laser;
           p.azimuth_deg = seq.azimuth_deg + seq.advance_deg * firing_us / model.firing_sequence_us;
           if (p.azimuth_deg >= 360.0) p.azimuth_deg -= 360.0;
-          p.distance_m = raw * kVelodyneDistanceUnitM;
+          p.distance_m = raw * unit_m;
           p.reflectivity = rec[2];
           p.block = static_cast<std::uint8_t>(seq.block + kind);
           p.sequence_in_block = static_cast<std::uint8_t>(seq.sequence_in_block);

@@ -25,8 +25,10 @@ inline constexpr std::size_t kVelodyneBlockBytes = 100;
 inline constexpr int kVelodyneChannelsPerBlock = 32;
 /// The block flag 0xFFEE as it appears on the wire (bytes FF EE, read little-endian).
 inline constexpr std::uint16_t kVelodyneBlockFlag = 0xEEFF;
-/// Distance unit of the VLP-16, VLP-32C and HDL-32E (2 mm); a raw distance of 0 means no return.
+/// Distance unit of the VLP-16 and HDL-32E (2 mm); a raw distance of 0 means no return.
 inline constexpr double kVelodyneDistanceUnitM = 0.002;
+/// Distance unit of the VLP-32C (4 mm: VLP-32C User Manual, "Data Packet Format").
+inline constexpr double kVlp32cDistanceUnitM = 0.004;
 /// Firing sequences in one packet at most (VLP-16 single return: 12 blocks x 2).
 inline constexpr int kVelodyneMaxSequences = 24;
 
@@ -76,6 +78,7 @@ struct VelodyneLayout {
   int lasers{16};              ///< lasers per firing sequence (16 or 32)
   int sequences_per_block{2};  ///< VLP-16 blocks hold two sequences, 32-laser blocks one
   double sequence_us{55.296};  ///< duration of one firing sequence
+  double distance_unit_m{kVelodyneDistanceUnitM};  ///< metres per raw distance count
   /// Layout of a built-in Velodyne model (16 rings: VLP-16 layout, 32: one sequence per block).
   static VelodyneLayout of(const core::SensorModel& model);
 };

@@ -301,8 +301,10 @@ TEST(Rosbag1, TopicChoiceAndUnsupportedTypes) {
     FAIL();
   } catch (const core::InputError& e) {
     const std::string what = e.what();
-    EXPECT_NE(what.find("no velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2"),
-              std::string::npos)
+    EXPECT_NE(
+        what.find(
+            "no velodyne_msgs/VelodyneScan, pandar_msgs/PandarScan or sensor_msgs/PointCloud2"),
+        std::string::npos)
         << what;
     EXPECT_NE(what.find("/imu (sensor_msgs/Imu)"), std::string::npos) << what;
   }

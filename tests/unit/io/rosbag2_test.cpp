@@ -493,8 +493,10 @@ TEST(Rosbag2, CorruptBagsAreClearErrors) {
   // An unknown message type only.
   const fs::path only_log = dir.path() / "only_log";
   test::write_rosbag2(only_log, {kTopics[0]}, {{0, 1, {0, 1, 0, 0}}});
-  expect_input_error([&] { RosbagScanSource s(only_log); },
-                     {"no velodyne_msgs/VelodyneScan or sensor_msgs/PointCloud2", "/rosout"});
+  expect_input_error(
+      [&] { RosbagScanSource s(only_log); },
+      {"no velodyne_msgs/VelodyneScan, pandar_msgs/PandarScan or sensor_msgs/PointCloud2",
+       "/rosout"});
 
   // Metadata problems.
   const fs::path meta = dir.path() / "meta";

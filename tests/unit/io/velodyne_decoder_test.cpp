@@ -184,7 +184,8 @@ std::set<long long> check_scans(const Decoded& d, const VelodyneEncoder& enc, co
           EXPECT_EQ(scan.status(i), core::ReturnStatus::kNoReturn) << ring << "," << col;
           continue;
         }
-        const double range = want.distance_raw * 0.002;
+        // Manuals: the VLP-32C counts distance in 4 mm units, the VLP-16 and HDL-32E in 2 mm.
+        const double range = want.distance_raw * (m.name == "VLP-32C" ? 0.004 : 0.002);
         if (range < m.min_range_m) {
           EXPECT_EQ(scan.status(i), core::ReturnStatus::kTooClose) << ring << "," << col;
           continue;

@@ -1,0 +1,278 @@
+#include "ringtrack/sensors/ouster/ouster_decoder.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "ringtrack/core/error.hpp"
+
+namespace ringtrack::sensors::ouster {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+
+std::uint16_t le16(const std::uint8_t* p) {
+  return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+}
+
+std::uint32_t le32(const std::uint8_t* p) {
+  return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
+         (static_cast<std::uint32_t>(p[2]) << 16) | (static_cast<std::uint32_t>(p[3]) << 24);
+}
+
+std::uint64_t le64(const std::uint8_t* p) {
+  return static_cast<std::uint64_t>(le32(p)) | (static_cast<std::uint64_t>(le32(p + 4)) << 32);
+}
+
+// Offset of a column's block within a packet, and of its first pixel.
+std::size_t column_offset(const OusterMetadata& m, int column) {
+  const std::size_t pixels = static_cast<std::size_t>(m.pixels_per_column) * m.pixel_bytes();
+  if (m.profile == OusterProfile::kLegacy)
+    return static_cast<std::size_t>(column) * (16 + pixels + 4);
+  return 32 + static_cast<std::size_t>(column) * (12 + pixels);
+}
+
+std::size_t first_pixel(const OusterMetadata& m) {
+  return m.profile == OusterProfile::kLegacy ? 16 : 12;
+}
+
+// Reads one pixel of the profile at q.
+inline void read_pixel(const std::uint8_t* q, OusterProfile profile, OusterPixel& px) {
+  switch (profile) {
+    case OusterProfile::kLegacy:  // range 20 bits (mm), reflectivity u16, signal, NIR, unused
+      px.range_mm = le32(q) & 0xFFFFFu;
+      px.reflectivity = le16(q + 4);
+      break;
+    case OusterProfile::kRng19Rfl8Sig16Nir16:  // range 19 bits, reflectivity u8, signal, NIR
+      px.range_mm = le32(q) & 0x7FFFFu;
+      px.reflectivity = q[4];
+      break;
+    case OusterProfile::kRng19Rfl8Sig16Nir16Dual:  // (range 19 bits, reflectivity in bits 24..31)
+                                                   // x 2, signal x 2, NIR
+      px.range_mm = le32(q) & 0x7FFFFu;
+      px.reflectivity = q[3];
+      px.range2_mm = le32(q + 4) & 0x7FFFFu;
+      break;
+    case OusterProfile::kRng15Rfl8Nir8:  // range 15 bits in 8 mm units, reflectivity u8, NIR u8
+      px.range_mm = (le16(q) & 0x7FFFu) * 8u;
+      px.reflectivity = q[2];
+      break;
+  }
+}
+
+}  // namespace
+
+OusterPixel ouster_pixel(std::span<const std::uint8_t> packet, const OusterMetadata& metadata,
+                         int column, int beam) {
+  const std::uint8_t* p = packet.data() + column_offset(metadata, column) + first_pixel(metadata) +
+                          static_cast<std::size_t>(beam) * metadata.pixel_bytes();
+  OusterPixel px;
+  read_pixel(p, metadata.profile, px);
+  return px;
+}
+
+OusterDecoder::OusterDecoder(OusterMetadata metadata, OusterDecoderOptions options)
+    : metadata_(std::move(metadata)), options_(options), model_(ouster_sensor_model(metadata_)) {
+  const auto beams = static_cast<std::size_t>(metadata_.pixels_per_column);
+  ring_of_beam_.resize(beams);
+  cos_alt_.resize(beams);
+  sin_alt_.resize(beams);
+  cos_beam_az_.resize(beams);
+  sin_beam_az_.resize(beams);
+  for (std::size_t b = 0; b < beams; ++b) {
+    ring_of_beam_[b] = model_.ring_of_laser(static_cast<int>(b));
+    const double alt = kTwoPi * metadata_.beam_altitude_deg[b] / 360.0;
+    const double az = -kTwoPi * metadata_.beam_azimuth_deg[b] / 360.0;
+    cos_alt_[b] = std::cos(alt);
+    sin_alt_[b] = std::sin(alt);
+    cos_beam_az_[b] = std::cos(az);
+    sin_beam_az_[b] = std::sin(az);
+  }
+  const int w = metadata_.columns_per_frame;
+  cos_enc_.resize(static_cast<std::size_t>(w));
+  sin_enc_.resize(static_cast<std::size_t>(w));
+  for (int m = 0; m < w; ++m) {
+    const double enc = kTwoPi * (1.0 - static_cast<double>(m) / w);
+    cos_enc_[static_cast<std::size_t>(m)] = std::cos(enc);
+    sin_enc_[static_cast<std::size_t>(m)] = std::sin(enc);
+  }
+  const auto& t = metadata_.lidar_to_sensor;
+  rotation_ = {t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]};
+  translation_mm_ = {t[3], t[7], t[11]};
+  yaw_rad_ = std::atan2(t[4], t[0]);
+  // Per (measurement id, beam): the point is linear in the range, p = range * direction +
+  // offset (the formula of point() with the transform folded in), so decoding is 3 FMAs.
+  lut_direction_.resize(static_cast<std::size_t>(w) * beams);
+  lut_offset_.resize(lut_direction_.size());
+  for (int m = 0; m < w; ++m) {
+    for (std::size_t b = 0; b < beams; ++b) {
+      const Eigen::Vector3d at0 = point(static_cast<int>(b), m, 0.0);
+      const Eigen::Vector3d at1 = point(static_cast<int>(b), m, 1000.0);  // 1 m
+      const std::size_t k = static_cast<std::size_t>(m) * beams + b;
+      lut_direction_[k] = (at1 - at0).cast<float>();
+      lut_offset_[k] = at0.cast<float>();
+    }
+  }
+}
+
+Eigen::Vector3d OusterDecoder::point(int beam, int measurement_id, double range_mm) const {
+  const auto b = static_cast<std::size_t>(beam);
+  const auto m = static_cast<std::size_t>(measurement_id);
+  const double n = metadata_.origin_to_beam_mm;
+  const double r = range_mm - n;
+  // cos/sin(encoder + beam azimuth) by the angle-addition formulas.
+  const double c = cos_enc_[m] * cos_beam_az_[b] - sin_enc_[m] * sin_beam_az_[b];
+  const double s = sin_enc_[m] * cos_beam_az_[b] + cos_enc_[m] * sin_beam_az_[b];
+  const double x = r * c * cos_alt_[b] + n * cos_enc_[m];
+  const double y = r * s * cos_alt_[b] + n * sin_enc_[m];
+  const double z = r * sin_alt_[b];
+  const auto& R = rotation_;
+  return Eigen::Vector3d(R[0] * x + R[1] * y + R[2] * z + translation_mm_[0],
+                         R[3] * x + R[4] * y + R[5] * z + translation_mm_[1],
+                         R[6] * x + R[7] * y + R[8] * z + translation_mm_[2]) *
+         1e-3;
+}
+
+void OusterDecoder::start_frame(int frame_id) {
+  if (spare_ && spare_->rings() == model_.rings() && spare_->columns() == model_.columns()) {
+    scan_ = std::move(spare_);
+    spare_.reset();
+    scan_->reset();
+  } else {
+    scan_.emplace(model_.rings(), model_.columns());
+  }
+  stamps_.assign(static_cast<std::size_t>(metadata_.columns_per_frame), 0);
+  seen_.assign(static_cast<std::size_t>(metadata_.columns_per_frame), 0);
+  frame_id_ = frame_id;
+}
+
+void OusterDecoder::add_packet(std::span<const std::uint8_t> payload, std::int64_t) {
+  ++stats_.packets;
+  if (payload.size() != metadata_.packet_bytes()) {
+    if (stats_.decoded_packets == 0) {
+      throw core::InputError("ouster packet " + std::to_string(stats_.packets) + ": " +
+                             std::to_string(payload.size()) + " bytes, but the metadata (" +
+                             metadata_.source + ") describes " + to_string(metadata_.profile) +
+                             " packets of " + std::to_string(metadata_.columns_per_packet) +
+                             " columns x " + std::to_string(metadata_.pixels_per_column) +
+                             " pixels = " + std::to_string(metadata_.packet_bytes()) +
+                             " bytes (metadata of another sensor?)");
+    }
+    ++stats_.wrong_size;
+    return;
+  }
+  const std::uint8_t* p = payload.data();
+  const bool legacy = metadata_.profile == OusterProfile::kLegacy;
+  const int frame_id = legacy ? le16(p + 10) : le16(p + 2);
+  if (scan_ && frame_id != frame_id_) finish_frame();
+  if (!scan_) start_frame(frame_id);
+  core::OrganizedScan& scan = *scan_;
+  const int w = metadata_.columns_per_frame;
+  const int beams = metadata_.pixels_per_column;
+  const std::size_t pixels = static_cast<std::size_t>(beams) * metadata_.pixel_bytes();
+  const auto min_range = static_cast<float>(model_.min_range_m);
+  const auto max_range = static_cast<float>(model_.max_range_m);
+  for (int col = 0; col < metadata_.columns_per_packet; ++col) {
+    const std::uint8_t* block = p + column_offset(metadata_, col);
+    const auto stamp = static_cast<std::int64_t>(le64(block));
+    const int m = le16(block + 8);
+    const bool valid =
+        legacy ? le32(block + 16 + pixels) == 0xFFFFFFFFu : (le16(block + 10) & 1) != 0;
+    if (!valid) {
+      ++stats_.invalid_columns;
+      continue;
+    }
+    if (m >= w) {
+      ++stats_.bad_measurement_id;
+      continue;
+    }
+    seen_[static_cast<std::size_t>(m)] = 1;
+    stamps_[static_cast<std::size_t>(m)] = stamp;
+    const std::uint8_t* q = block + first_pixel(metadata_);
+    const std::size_t stride = metadata_.pixel_bytes();
+    const std::size_t lut = static_cast<std::size_t>(m) * static_cast<std::size_t>(beams);
+    for (int b = 0; b < beams; ++b, q += stride) {
+      OusterPixel px;
+      read_pixel(q, metadata_.profile, px);
+      if (px.range_mm == 0) continue;
+      // Destaggered: the beam's pixel moves by its shift so that a column holds one direction.
+      int c = m + metadata_.pixel_shift_by_row[static_cast<std::size_t>(b)];
+      if (c >= w) c -= w;
+      const int ring = ring_of_beam_[static_cast<std::size_t>(b)];
+      const float range = static_cast<float>(px.range_mm) * 1e-3f;
+      if (range < min_range) {
+        scan.set_invalid(ring, c, core::ReturnStatus::kTooClose);
+        continue;
+      }
+      if (range > max_range) {
+        scan.set_invalid(ring, c, core::ReturnStatus::kTooFar);
+        continue;
+      }
+      const std::size_t k = lut + static_cast<std::size_t>(b);
+      scan.set_return(ring, c, range, static_cast<float>(px.reflectivity),
+                      lut_direction_[k] * range + lut_offset_[k]);
+    }
+  }
+  ++stats_.decoded_packets;
+}
+
+void OusterDecoder::finish_frame() {
+  if (!scan_) return;
+  const int w = metadata_.columns_per_frame;
+  std::uint64_t missing = 0;
+  for (int m = 0; m < w; ++m) {
+    if (metadata_.in_window(m) && seen_[static_cast<std::size_t>(m)] == 0) ++missing;
+  }
+  if (missing > 0 && !options_.keep_partial_scans) {
+    ++stats_.partial_scans_dropped;
+    spare_ = std::move(scan_);  // its memory serves the next frame
+    scan_.reset();
+    return;
+  }
+  stats_.lost_columns += missing;
+  core::OrganizedScan& scan = *scan_;
+  // Column c of the destaggered scan: the direction of measurement c - shift of beam 0 (every
+  // beam's shift brings it to about that azimuth), in the sensor frame (ringtrack's azimuths
+  // are counter-clockwise from +x, as Ouster's). Its stamp: that of measurement c (rows with
+  // another shift were measured up to shift / columns of a revolution apart).
+  const int shift0 = metadata_.pixel_shift_by_row[0];
+  const double beam0_az = -kTwoPi * metadata_.beam_azimuth_deg[0] / 360.0;
+  const double period_ns = 1e9 / (metadata_.scan_rate_hz * w);
+  // A stamp for columns that were not received: continued from the nearest received one.
+  int anchor = -1;
+  for (int m = 0; m < w; ++m) {
+    if (seen_[static_cast<std::size_t>(m)] != 0) {
+      anchor = m;
+      break;
+    }
+  }
+  for (int c = 0; c < w; ++c) {
+    const int m = ((c - shift0) % w + w) % w;
+    double az = kTwoPi * (1.0 - static_cast<double>(m) / w) + beam0_az + yaw_rad_;
+    az = std::fmod(az, kTwoPi);
+    if (az < 0) az += kTwoPi;
+    scan.column_azimuth_rad[static_cast<std::size_t>(c)] = az;
+    if (seen_[static_cast<std::size_t>(c)] != 0) {
+      scan.column_stamp_ns[static_cast<std::size_t>(c)] = stamps_[static_cast<std::size_t>(c)];
+    } else if (anchor >= 0) {
+      scan.column_stamp_ns[static_cast<std::size_t>(c)] =
+          stamps_[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns);
+    }
+  }
+  scan.stamp_ns = scan.column_stamp_ns[0];
+  ready_.push_back(std::move(scan));
+  ++stats_.scans;
+  scan_.reset();
+}
+
+void OusterDecoder::finish() {
+  finish_frame();
+}
+
+std::optional<core::OrganizedScan> OusterDecoder::pop_scan() {
+  if (ready_.empty()) return std::nullopt;
+  core::OrganizedScan scan = std::move(ready_.front());
+  ready_.pop_front();
+  return scan;
+}
+
+}  // namespace ringtrack::sensors::ouster

@@ -1,0 +1,100 @@
+#pragma once
+/// Assembles Ouster lidar packets into organized, destaggered scans (one per frame) with the
+/// XYZ of Ouster's manual (beam origin offset, lidar-to-sensor transform). See docs/ouster.md.
+
+#include <array>
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "ringtrack/core/organized_scan.hpp"
+#include "ringtrack/core/sensor_model.hpp"
+#include "ringtrack/sensors/ouster/ouster_metadata.hpp"
+
+namespace ringtrack::sensors::ouster {
+
+/// Options of the decoder.
+struct OusterDecoderOptions {
+  bool keep_partial_scans{false};  ///< emit frames with columns of the window missing
+};
+
+/// Counters; every skipped packet and missing column is counted here.
+struct OusterDecoderStats {
+  std::uint64_t packets{0};
+  std::uint64_t decoded_packets{0};
+  std::uint64_t wrong_size{0};          ///< packets of another size than the metadata's format
+  std::uint64_t invalid_columns{0};     ///< columns flagged invalid by the sensor
+  std::uint64_t bad_measurement_id{0};  ///< measurement ids >= columns per frame
+  std::uint64_t lost_columns{0};        ///< columns of the window missing from emitted scans
+  std::uint64_t scans{0};
+  std::uint64_t partial_scans_dropped{0};
+};
+
+/// One decoded pixel (for tests and flat point lists).
+struct OusterPixel {
+  std::uint32_t range_mm{0};   ///< first return (0 = none)
+  std::uint32_t range2_mm{0};  ///< second return of the _DUAL profile
+  std::uint16_t reflectivity{0};
+};
+
+/// Reads pixel `beam` of column `column` of a packet of the metadata's format (no checks).
+OusterPixel ouster_pixel(std::span<const std::uint8_t> packet, const OusterMetadata& metadata,
+                         int column, int beam);
+
+/// Turns a stream of Ouster lidar packets into OrganizedScans.
+class OusterDecoder {
+ public:
+  /// Throws core::InputError when the metadata is unusable.
+  OusterDecoder(OusterMetadata metadata, OusterDecoderOptions options = {});
+
+  /// Decodes one lidar packet (UDP payload, port 7502) received at host_stamp_ns (unused: the
+  /// packets carry the sensor's own column time stamps). The first packet must have the
+  /// metadata's size, else core::InputError (packets of another sensor or profile); later
+  /// packets of another size are counted and skipped.
+  void add_packet(std::span<const std::uint8_t> payload, std::int64_t host_stamp_ns);
+  /// The oldest completed scan, if any.
+  std::optional<core::OrganizedScan> pop_scan();
+  /// Hands a scan back for reuse: the next frame is built in its memory (saves allocating and
+  /// page-faulting a fresh scan per frame).
+  void recycle(core::OrganizedScan&& used) { spare_ = std::move(used); }
+  /// Ends the stream: emits the frame in progress when complete (or with keep_partial_scans).
+  void finish();
+
+  /// The sensor model.
+  [[nodiscard]] const core::SensorModel& model() const { return model_; }
+  /// The metadata.
+  [[nodiscard]] const OusterMetadata& metadata() const { return metadata_; }
+  /// Counters.
+  [[nodiscard]] const OusterDecoderStats& stats() const { return stats_; }
+
+  /// Sensor-frame point (metres) of range_mm at measurement id m of beam (the manual's formula).
+  [[nodiscard]] Eigen::Vector3d point(int beam, int measurement_id, double range_mm) const;
+
+ private:
+  void start_frame(int frame_id);
+  void finish_frame();
+
+  OusterMetadata metadata_;
+  OusterDecoderOptions options_;
+  core::SensorModel model_;
+  std::vector<int> ring_of_beam_;
+  std::vector<double> cos_alt_, sin_alt_, cos_beam_az_, sin_beam_az_;
+  std::vector<double> cos_enc_, sin_enc_;  // per measurement id
+  std::array<double, 9> rotation_{};
+  std::array<double, 3> translation_mm_{};
+  double yaw_rad_{0};
+  std::vector<Eigen::Vector3f> lut_direction_, lut_offset_;  // per (measurement id, beam)
+
+  std::optional<core::OrganizedScan> scan_;
+  std::optional<core::OrganizedScan> spare_;
+  std::vector<std::int64_t> stamps_;  // per measurement id of the frame in progress
+  std::vector<std::uint8_t> seen_;    // per measurement id
+  int frame_id_{-1};
+  std::deque<core::OrganizedScan> ready_;
+  OusterDecoderStats stats_;
+};
+
+}  // namespace ringtrack::sensors::ouster
