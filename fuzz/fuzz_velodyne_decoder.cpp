@@ -41,7 +41,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       const std::size_t n = (head & 0x80) != 0 ? static_cast<std::size_t>(head & 0x3F) * 23 : 1206;
       const std::size_t take = std::min(n, size - at);
       packet.assign(n, 0);
-      std::memcpy(packet.data(), data + at, take);
+      // A zero-length packet has no buffer: memcpy from or to null is undefined even for 0 bytes.
+      if (take > 0) std::memcpy(packet.data(), data + at, take);
       at += take;
       if ((head & 0x40) != 0 && n == 1206) {
         for (std::size_t b = 0; b < 12; ++b) {
