@@ -8,21 +8,8 @@ namespace ringtrack::io {
 HesaiPcapSource::HesaiPcapSource(const std::filesystem::path& path, std::uint16_t data_port,
                                  sensors::hesai::HesaiDecoderOptions options, bool allow_truncated)
     : reader_(path, allow_truncated), port_(data_port), decoder_(options) {
-  // The first data packet must fit the named model and the calibration: found here, before a
-  // front end creates any output, rather than at the first next().
-  PcapReader probe(path, true);
-  UdpDatagram datagram;
-  while (probe.next(datagram)) {
-    if (datagram.dst_port != port_) continue;
-    sensors::hesai::HesaiDecoder check(options);
-    try {
-      check.add_packet(datagram.payload, datagram.stamp_ns);
-    } catch (const core::InputError& e) {
-      throw core::InputError(reader_.path() + " (frame " + std::to_string(datagram.frame) +
-                             "): " + e.what());
-    }
-    break;
-  }
+  sensors::hesai::HesaiDecoder probe(options);
+  check_first_packet(path, port_, probe);
 }
 
 std::optional<core::OrganizedScan> HesaiPcapSource::next() {
@@ -43,12 +30,7 @@ std::optional<core::OrganizedScan> HesaiPcapSource::next() {
       ++other_datagrams_;
       continue;
     }
-    try {
-      decoder_.add_packet(datagram.payload, datagram.stamp_ns);
-    } catch (const core::InputError& e) {
-      throw core::InputError(reader_.path() + " (frame " + std::to_string(datagram.frame) +
-                             "): " + e.what());
-    }
+    add_packet_from(reader_, datagram, decoder_);
     if (auto scan = decoder_.pop_scan()) return scan;
   }
   return decoder_.pop_scan();

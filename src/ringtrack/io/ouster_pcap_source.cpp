@@ -9,21 +9,8 @@ OusterPcapSource::OusterPcapSource(const std::filesystem::path& path,
                                    sensors::ouster::OusterDecoderOptions options,
                                    std::uint16_t lidar_port)
     : reader_(path, true), decoder_(std::move(metadata), options), port_(lidar_port) {
-  // The first lidar packet must fit the metadata: found here, before a front end creates any
-  // output, rather than at the first next().
-  PcapReader probe(path, true);
-  UdpDatagram datagram;
-  while (probe.next(datagram)) {
-    if (datagram.dst_port != port_) continue;
-    sensors::ouster::OusterDecoder check(decoder_.metadata(), options);
-    try {
-      check.add_packet(datagram.payload, datagram.stamp_ns);
-    } catch (const core::InputError& e) {
-      throw core::InputError(reader_.path() + " (frame " + std::to_string(datagram.frame) +
-                             "): " + e.what());
-    }
-    break;
-  }
+  sensors::ouster::OusterDecoder probe(decoder_.metadata(), options);
+  check_first_packet(path, port_, probe);
 }
 
 std::optional<core::OrganizedScan> OusterPcapSource::next() {
@@ -41,12 +28,7 @@ std::optional<core::OrganizedScan> OusterPcapSource::next() {
       break;
     }
     if (datagram.dst_port == port_) {
-      try {
-        decoder_.add_packet(datagram.payload, datagram.stamp_ns);
-      } catch (const core::InputError& e) {
-        throw core::InputError(reader_.path() + " (frame " + std::to_string(datagram.frame) +
-                               "): " + e.what());
-      }
+      add_packet_from(reader_, datagram, decoder_);
       if (auto scan = decoder_.pop_scan()) return scan;
     } else if (datagram.dst_port == 7503) {
       ++imu_datagrams_;

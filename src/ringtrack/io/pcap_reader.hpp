@@ -7,6 +7,8 @@
 #include <span>
 #include <string>
 
+#include "ringtrack/core/error.hpp"
+
 struct pcap;  // libpcap's handle (pcap_t), kept out of this header
 
 namespace ringtrack::io {
@@ -69,6 +71,32 @@ class PcapReader {
   bool done_{false};
   PcapStats stats_;
 };
+
+/// Feeds a datagram's payload to a sensor decoder (anything with add_packet(payload, stamp_ns));
+/// a core::InputError it throws is thrown again with the capture's path and the frame in front.
+template <class Decoder>
+void add_packet_from(const PcapReader& reader, const UdpDatagram& datagram, Decoder& decoder) {
+  try {
+    decoder.add_packet(datagram.payload, datagram.stamp_ns);
+  } catch (const core::InputError& e) {
+    throw core::InputError(reader.path() + " (frame " + std::to_string(datagram.frame) +
+                           "): " + e.what());
+  }
+}
+
+/// Feeds the capture's first datagram to `port` to `probe` (a fresh decoder), so that a packet
+/// of another model or one that does not fit the calibration is reported when a source opens
+/// the file, before a front end creates any output, rather than at its first scan.
+template <class Decoder>
+void check_first_packet(const std::filesystem::path& path, std::uint16_t port, Decoder& probe) {
+  PcapReader reader(path, true);
+  UdpDatagram datagram;
+  while (reader.next(datagram)) {
+    if (datagram.dst_port != port) continue;
+    add_packet_from(reader, datagram, probe);
+    return;
+  }
+}
 
 /// Parses one IPv4 packet (from its IP header) into a UDP datagram; false (with the reason in
 /// `why`: "non-udp", "fragment", "short", "non-ipv4") when it is not a complete UDP datagram.

@@ -28,12 +28,7 @@ std::optional<core::OrganizedScan> VelodynePcapSource::next() {
     }
     if (datagram.dst_port == options_.data_port) {
       ++stats_.data_datagrams;
-      try {
-        decoder_.add_packet(datagram.payload, datagram.stamp_ns);
-      } catch (const core::InputError& e) {
-        throw core::InputError(reader_.path() + " (frame " + std::to_string(datagram.frame) +
-                               "): " + e.what());
-      }
+      add_packet_from(reader_, datagram, decoder_);
       if (auto scan = decoder_.pop_scan()) return scan;
     } else if (datagram.dst_port == options_.position_port) {
       ++stats_.position_datagrams;
