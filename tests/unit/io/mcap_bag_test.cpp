@@ -99,10 +99,12 @@ class McapBag : public ::testing::Test {
  protected:
   void SetUp() override { dir_ = data_dir(); }
   std::vector<core::OrganizedScan> sqlite_scans() {
-    auto source = open_scan_source((dir_ / "ros2_bag").string(), {});
+    const ScanSourceOptions options;
+    auto source = open_scan_source((dir_ / "ros2_bag").string(), options);
     return all_scans(*source);
   }
   fs::path dir_;
+  const ScanSourceOptions defaults_;
 };
 
 TEST_F(McapBag, EveryLayoutGivesTheScansOfTheSqliteBag) {
@@ -121,7 +123,7 @@ TEST_F(McapBag, EveryLayoutGivesTheScansOfTheSqliteBag) {
     write_mcap(tmp / "bag.dump", file, options);
     EXPECT_TRUE(is_mcap_bag(file));
     EXPECT_EQ(guess_scan_input_format(file.string()), ScanInputFormat::kRosbag2);
-    auto source = open_scan_source(file.string(), {});
+    auto source = open_scan_source(file.string(), defaults_);
     const auto scans = all_scans(*source);
     ASSERT_EQ(scans.size(), expected.size()) << name;
     for (std::size_t k = 0; k < scans.size(); ++k) {
@@ -140,7 +142,7 @@ TEST_F(McapBag, EveryLayoutGivesTheScansOfTheSqliteBag) {
                    "  relative_file_paths:\n    - folder_0.mcap\n  compression_format: \"\"\n"
                    "  compression_mode: \"\"\n");
   EXPECT_TRUE(is_mcap_bag(tmp / "folder"));
-  auto folder = open_scan_source((tmp / "folder").string(), {});
+  auto folder = open_scan_source((tmp / "folder").string(), defaults_);
   EXPECT_EQ(all_scans(*folder).size(), expected.size());
 }
 
@@ -154,7 +156,7 @@ TEST_F(McapBag, ACutOffBagGivesTheScansBeforeTheCutAndAWarning) {
   const auto full = fs::file_size(tmp / "full.mcap");
   fs::copy_file(tmp / "full.mcap", tmp / "cut.mcap");
   fs::resize_file(tmp / "cut.mcap", full * 9 / 10);
-  auto source = open_scan_source((tmp / "cut.mcap").string(), {});
+  auto source = open_scan_source((tmp / "cut.mcap").string(), defaults_);
   const auto scans = all_scans(*source);
   ASSERT_GE(scans.size(), 1u);
   ASSERT_LT(scans.size(), expected.size());
@@ -175,7 +177,7 @@ TEST_F(McapBag, ACorruptChunkIsAnErrorNamingItsOffset) {
   bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0x10);
   test::write_text(tmp / "bad.mcap", bytes);
   try {
-    auto source = open_scan_source((tmp / "bad.mcap").string(), {});
+    auto source = open_scan_source((tmp / "bad.mcap").string(), defaults_);
     all_scans(*source);
     ADD_FAILURE() << "no error";
   } catch (const core::InputError& e) {

@@ -28,12 +28,6 @@ std::vector<std::uint8_t> read_all(const fs::path& p) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-void write_all(const fs::path& p, const std::vector<std::uint8_t>& bytes) {
-  std::ofstream out(p, std::ios::binary);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
-
 // Message k of the test files: its channel and payload (sizes vary, some empty).
 struct Sent {
   std::uint16_t channel;
@@ -231,7 +225,7 @@ TEST(McapReader, ACutOffFileYieldsEveryCompleteMessageAndAWarning) {
     previous = got.size();
     for (std::size_t k = 0; k < got.size(); ++k) EXPECT_EQ(data[k], messages[k].data);
     for (const auto& m : got) EXPECT_LT(m.offset, cut);
-    if (cut < full.size() - 400) {  // before the data end: the cut is reported
+    if (got.size() < all.size()) {  // messages lost: the cut is reported
       EXPECT_NE(r.warning().find("cut.mcap: file cut off at offset "), std::string::npos)
           << r.warning();
     }
@@ -267,8 +261,6 @@ TEST(McapReader, BadInputIsAOneLineErrorNamingTheOffset) {
 
   // A payload byte inside the (uncompressed) chunk: its CRC no longer matches.
   bad = good;
-  const std::size_t chunk_at = 8 + 9 + 4 + 0 + 4 + 9;  // magic, Header("", "ringtrack"): see below
-  (void)chunk_at;
   std::size_t first_chunk = 0;
   for (std::size_t i = 8; i + 9 < good.size();) {
     std::uint64_t len = 0;
@@ -301,7 +293,6 @@ TEST(McapReader, BadInputIsAOneLineErrorNamingTheOffset) {
   EXPECT_NE(error_of(bad).find("CRC"), std::string::npos);
 
   // The data section CRC covers the message indexes, which the reader otherwise skips.
-  McapReaderOptions no_summary;
   bad = good;
   std::size_t index_at = 0;
   for (std::size_t i = 8; i + 9 < good.size();) {
