@@ -210,8 +210,12 @@ struct McapWriter::Impl {
         lock.unlock();
       }
       lock.lock();
+      // Reused as a chunk: only the buffers' capacity is kept.
       job.records.clear();
       job.index.clear();
+      job.raw = false;
+      job.metadata_name.clear();
+      job.start_ns = job.end_ns = 0;
       spare.push_back(std::move(job));
       changed.notify_all();
     }
