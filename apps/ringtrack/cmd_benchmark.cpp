@@ -23,6 +23,7 @@
 #include "benchmark_run.hpp"
 #include "commands.hpp"
 #include "output_rows.hpp"
+#include "plots.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/output_file.hpp"
@@ -382,32 +383,9 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
   return md.str();
 }
 
-// Runs the plot script with Debian's Python; false (and a warning) when it cannot.
+// The Fig. 6-style picture of the stage times; false (and a warning) when it cannot be drawn.
 bool plot_stage_times(const fs::path& timing_csv, const fs::path& png) {
-  const fs::path script = fs::path(RINGTRACK_SCRIPTS_DIR) / "plot_stage_times.py";
-  const char* python = "/usr/bin/python3";
-  if (!fs::exists(python) || !fs::exists(script)) {
-    std::cerr << "ringtrack: warning: no plot: " << (fs::exists(python) ? script.string() : python)
-              << " not found\n";
-    return false;
-  }
-  if (std::system("/usr/bin/python3 -c 'import matplotlib' >/dev/null 2>&1") != 0) {
-    std::cerr << "ringtrack: warning: no plot: python3-matplotlib is not installed (apt-get "
-                 "install python3-matplotlib)\n";
-    return false;
-  }
-  const auto quote = [](const std::string& s) {
-    std::string q = "'";
-    for (const char ch : s) q += ch == '\'' ? std::string("'\\''") : std::string(1, ch);
-    return q + "'";
-  };
-  const std::string cmd = std::string(python) + " " + quote(script.string()) + " " +
-                          quote(timing_csv.string()) + " " + quote(png.string());
-  if (std::system(cmd.c_str()) != 0) {
-    std::cerr << "ringtrack: warning: the plot script failed: " << cmd << "\n";
-    return false;
-  }
-  return true;
+  return run_plot_script("plot_stage_times.py", {timing_csv, png});
 }
 
 void run_benchmark(const BenchmarkOptions& o) {

@@ -10,12 +10,14 @@
 #include <deque>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <set>
 #include <string>
 #include <utility>
 
 #include "commands.hpp"
 #include "output_rows.hpp"
+#include "plots.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/foxglove_sink.hpp"
@@ -27,6 +29,7 @@
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/sequence.hpp"
 #include "ringtrack/io/text.hpp"
+#include "ringtrack/mapping/static_map.hpp"
 #include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 #include "ringtrack/version.hpp"
@@ -58,6 +61,7 @@ struct RunOptions {
   bool filtered_scans{false};
   bool no_deskew{false};
   bool quiet{false};
+  bool no_plots{false};
   ConfigOptions config;
 };
 
@@ -305,6 +309,27 @@ std::unique_ptr<io::FoxgloveSink> open_mcap(const RunOptions& o, const core::Con
   return sink;
 }
 
+// Writes a voxel map's points as binary PLY (x y z intensity); returns how many.
+std::size_t write_map_ply(const fs::path& path, const mapping::StaticMap& map) {
+  const auto points = map.points();
+  std::vector<Eigen::Vector3f> xyz;
+  std::vector<float> intensity;
+  xyz.reserve(points.size());
+  intensity.reserve(points.size());
+  for (const auto& p : points) {
+    xyz.push_back(p.position);
+    intensity.push_back(p.intensity);
+  }
+  io::write_ply(path, xyz, intensity);
+  return points.size();
+}
+
+// Every point of the scans the dynamic-object filter released, removed or not: the raw side of
+// the Fig. 7 pictures, voxelized as the static map is so that the two compare.
+void accumulate_raw(const mapping::DynamicObjectFilter& filter, mapping::StaticMap& raw) {
+  for (const auto& scan : filter.released()) raw.insert(scan.points, scan.intensities, {});
+}
+
 void run(const RunOptions& o) {
   const core::Config config = o.config.load();
   RunInput input(o);
@@ -336,11 +361,16 @@ void run(const RunOptions& o) {
   core::OrganizedScan scan;
   core::Pose pose;
   std::vector<io::TrackRow> rows;
+  std::vector<core::Pose> poses;
+  std::optional<mapping::StaticMap> raw_map;
+  if (!o.no_plots) raw_map.emplace(config.mapping.voxel_size_m);
   g_interrupted.store(false);
   const auto previous_handler = std::signal(SIGINT, on_interrupt);
   while (!g_interrupted.load() && input.next(index, scan, pose)) {
     if (!pipeline) pipeline = std::make_unique<pipeline::Pipeline>(config, input.sensor_model());
     const auto& result = pipeline->process(scan, pose);
+    poses.push_back(pose);
+    if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
     rows.clear();
     for (const auto& h : result.hypotheses) {
       if (!h.reported) continue;  // unconfirmed or lost (docs/tracking.md, "What is reported")
@@ -366,20 +396,18 @@ void run(const RunOptions& o) {
   if (progress) std::fprintf(stderr, "\n");
   pipeline->finish();
   if (filtered) filtered->write_released(pipeline->dynamic_filter());
+  if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
   tracks.close();
   timing.close();
 
-  const auto map_points = pipeline->static_map().points();
-  std::vector<Eigen::Vector3f> xyz;
-  std::vector<float> intensity;
-  xyz.reserve(map_points.size());
-  intensity.reserve(map_points.size());
-  for (const auto& p : map_points) {
-    xyz.push_back(p.position);
-    intensity.push_back(p.intensity);
-  }
-  io::write_ply(out / "static_map.ply", xyz, intensity);
+  const std::size_t map_voxels = write_map_ply(out / "static_map.ply", pipeline->static_map());
+  io::write_tum(out / "poses.txt", poses);
   if (mcap) mcap->finish(pipeline->static_map(), scan.stamp_ns);
+  bool plotted = false;
+  if (raw_map) {
+    write_map_ply(out / "raw_map.ply", *raw_map);
+    plotted = run_plot_script("plot_maps.py", {out, out / "maps.png"});
+  }
 
   if (const auto summary = input.summary(); !summary.empty())
     std::printf("input            %s\n", summary.c_str());
@@ -387,11 +415,13 @@ void run(const RunOptions& o) {
               g_interrupted.load() ? " (interrupted: the outputs cover these scans only)" : "");
   std::printf("deskew           %s\n", input.deskew_summary().c_str());
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
-  std::printf("static map       %zu voxels\n", map_points.size());
+  std::printf("static map       %zu voxels\n", map_voxels);
   std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", percentile(total_ms, 0.5),
               percentile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
-  std::printf("outputs          %s/{tracks.csv,timing.csv,static_map.ply,config.yaml%s}\n",
-              o.out.c_str(), o.filtered_scans ? ",filtered/" : "");
+  std::printf(
+      "outputs          %s/{tracks.csv,timing.csv,static_map.ply,poses.txt,config.yaml%s%s%s}\n",
+      o.out.c_str(), raw_map ? ",raw_map.ply" : "", plotted ? ",maps.png" : "",
+      o.filtered_scans ? ",filtered/" : "");
   if (mcap) {
     std::printf("mcap             %s (%llu messages, %u chunks, %.1f MB)\n", o.mcap.c_str(),
                 static_cast<unsigned long long>(mcap->mcap_stats().messages),
@@ -444,6 +474,9 @@ void register_run(CLI::App& app) {
   cmd->add_option("--mcap-map-every", o->mcap_map_every,
                   "also write the static map to the MCAP every N scans (0: only at the end)");
   cmd->add_flag("--quiet", o->quiet, "no progress on stderr");
+  cmd->add_flag("--no-plots", o->no_plots,
+                "no raw_map.ply and maps.png (the accumulated raw points beside the static map, "
+                "as the paper's Fig. 7; needs python3-matplotlib)");
   o->config.add_to(*cmd);
   cmd->callback([o] { run(*o); });
 }

@@ -66,6 +66,59 @@ TEST_F(RunCli, WritesEveryOutputWithItsSchema) {
   EXPECT_NE(text.str().find("voxel_size_m: 0.2"), std::string::npos);
 }
 
+// Width and height from a PNG's IHDR chunk; {0, 0} when the file is not a PNG.
+std::pair<std::uint32_t, std::uint32_t> png_size(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  unsigned char h[24] = {};
+  in.read(reinterpret_cast<char*>(h), sizeof h);
+  if (!in || h[1] != 'P' || h[2] != 'N' || h[3] != 'G' || h[12] != 'I' || h[15] != 'R')
+    return {0, 0};
+  const auto be32 = [&](int i) {
+    return (std::uint32_t{h[i]} << 24) | (std::uint32_t{h[i + 1]} << 16) |
+           (std::uint32_t{h[i + 2]} << 8) | std::uint32_t{h[i + 3]};
+  };
+  return {be32(16), be32(20)};
+}
+
+bool have_matplotlib() {
+  return run_command("/usr/bin/python3 -c 'import matplotlib, numpy'").exit_code == 0;
+}
+
+TEST_F(RunCli, DrawsTheRawPointsBesideTheStaticMap) {
+  if (!have_matplotlib()) GTEST_SKIP() << "python3-matplotlib is not installed";
+  const std::string out = dir_ + "/plots";
+  const auto r = run_command(kCli + " run " + dir_ + "/seq --out " + out);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("maps.png"), std::string::npos) << r.out;
+  // Fig. 7: one figure of 14 x 6.6 inches at 110 dpi, two panels.
+  EXPECT_EQ(png_size(out + "/maps.png"), std::make_pair(1540u, 726u));
+  // Not blank: the pixels vary (a blank or single-colour figure has a tiny spread), read back by
+  // matplotlib's own PNG reader.
+  const auto spread =
+      run_command("/usr/bin/python3 -c \"import matplotlib.image as m; a = m.imread('" + out +
+                  "/maps.png'); print(int(1000 * a[..., :3].std()), int((a[..., :3].sum(axis=2) < "
+                  "2.9).mean() * 1000))\"");
+  ASSERT_EQ(spread.exit_code, 0) << spread.err;
+  int std_milli = 0, ink_permille = 0;
+  std::istringstream(spread.out) >> std_milli >> ink_permille;
+  EXPECT_GT(std_milli, 50) << spread.out;
+  EXPECT_GT(ink_permille, 20) << "share of non-white pixels, per mille: " << spread.out;
+  // The raw map holds every point, so at least as many voxels as the static map; one pose per
+  // scan.
+  EXPECT_EQ(first_line(out + "/raw_map.ply"), "ply");
+  EXPECT_GE(fs::file_size(out + "/raw_map.ply"), fs::file_size(out + "/static_map.ply"));
+  EXPECT_EQ(line_count(out + "/poses.txt"), 31u);  // a comment header, then one line per scan
+}
+
+TEST_F(RunCli, NoPlotsWritesNoPictures) {
+  const std::string out = dir_ + "/no-plots";
+  const auto r = run_command(kCli + " run " + dir_ + "/seq --out " + out + " --no-plots");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(fs::exists(out + "/maps.png"));
+  EXPECT_FALSE(fs::exists(out + "/raw_map.ply"));
+  EXPECT_TRUE(fs::exists(out + "/static_map.ply"));
+}
+
 TEST_F(RunCli, FilteredScansGiveMapMetricsInEval) {
   const std::string out = dir_ + "/out-map";
   ASSERT_EQ(run_command(kCli + " run " + dir_ + "/seq --out " + out + " --filtered-scans --quiet")
