@@ -21,8 +21,9 @@ import numpy as np  # noqa: E402
 MAX_POINTS = 400_000
 
 
-def read_ply(path):
-    """Returns an (n, 3) float array of the x y z of a PLY written by ringtrack (binary or ascii)."""
+def read_ply(path, columns=3):
+    """Returns an (n, columns) float array of the first properties (x y z, intensity) of a PLY
+    written by ringtrack (binary or ascii)."""
     with open(path, "rb") as f:
         header = []
         while True:
@@ -47,9 +48,9 @@ def read_ply(path):
             data = np.frombuffer(f.read(4 * len(properties) * count), dtype="<f4")
             if data.size != len(properties) * count:
                 raise ValueError(f"{path}: {count} points declared, the file holds fewer")
-            return data.reshape(count, len(properties))[:, :3]
+            return data.reshape(count, len(properties))[:, :columns]
         rows = np.loadtxt(f, dtype=np.float32, ndmin=2, max_rows=count)
-        return rows[:, :3] if count else np.zeros((0, 3), np.float32)
+        return rows[:, :columns] if count else np.zeros((0, columns), np.float32)
 
 
 def read_path(path):

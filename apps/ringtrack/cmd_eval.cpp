@@ -13,12 +13,15 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "plots.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/eval/map_metrics.hpp"
 #include "ringtrack/eval/tracking_eval.hpp"
 #include "ringtrack/io/mot_tables.hpp"
 #include "ringtrack/io/pcd.hpp"
+#include "ringtrack/io/ply.hpp"
 #include "ringtrack/io/sequence.hpp"
+#include "ringtrack/mapping/static_map.hpp"
 
 namespace ringtrack::cli {
 namespace {
@@ -39,6 +42,43 @@ struct EvalOptions {
   double moving_radius_m = 1.0;
   bool json = false;
   std::vector<std::string> filtered;  // per sequence: `ringtrack run --filtered-scans` output
+  std::string map_errors_png;         // with --filtered and one sequence: the error picture
+};
+
+// Where the dynamic-object filter erred, in the world frame (the third Fig. 7 picture): dynamic
+// points it kept and static points it removed, over the static points it kept (the scene, thinned
+// to one point per voxel: millions of points otherwise).
+struct MapErrorPoints {
+  static constexpr float kKept = 0.0f;  // kinds, written as the PLY's intensity
+  static constexpr float kDynamicKept = 1.0f;
+  static constexpr float kStaticRemoved = 2.0f;
+  static constexpr double kSceneVoxelM = 0.2;
+
+  std::vector<Eigen::Vector3f> errors;
+  std::vector<float> kind;
+  mapping::StaticMap scene{kSceneVoxelM};
+
+  void add(const Eigen::Isometry3f& world_from_sensor, const Eigen::Vector3f& p, bool dynamic,
+           bool kept) {
+    if (dynamic == kept) {
+      errors.push_back(world_from_sensor * p);
+      kind.push_back(dynamic ? kDynamicKept : kStaticRemoved);
+    } else if (kept) {
+      scene.insert(world_from_sensor * p, kKept);
+    }  // else a dynamic point removed: right, and gone from the map
+  }
+  // The scene's voxels, then the errors (drawn on top).
+  void write_ply(const fs::path& path) const {
+    std::vector<Eigen::Vector3f> points;
+    std::vector<float> kinds;
+    scene.for_each([&](const mapping::MapPoint& m) {
+      points.push_back(m.position);
+      kinds.push_back(kKept);
+    });
+    points.insert(points.end(), errors.begin(), errors.end());
+    kinds.insert(kinds.end(), kind.begin(), kind.end());
+    io::write_ply(path, points, kinds);
+  }
 };
 
 struct SequenceResult {
@@ -52,7 +92,7 @@ struct SequenceResult {
 // Map metrics of filtered scans against the sequence's per-point labels: a point is dynamic when
 // its object moves in any scan of objects.csv (docs/evaluation.md); kept = still valid.
 eval::MapCounts evaluate_filtered(const fs::path& sequence_dir, const fs::path& objects_csv,
-                                  const fs::path& filtered_dir) {
+                                  const fs::path& filtered_dir, MapErrorPoints* errors) {
   std::vector<std::int64_t> dynamic_ids;
   for (const auto& row : io::read_objects_csv(objects_csv)) {
     if (row.moving) dynamic_ids.push_back(row.id);
@@ -82,12 +122,15 @@ eval::MapCounts evaluate_filtered(const fs::path& sequence_dir, const fs::path& 
                              " differs from the sequence's " + std::to_string(item.scan.rings()) +
                              " x " + std::to_string(item.scan.columns()));
     }
+    const Eigen::Isometry3f world_from_sensor = item.pose.isometry().cast<float>();
     for (std::size_t i = 0; i < item.scan.size(); ++i) {
       if (!item.scan.valid(i)) continue;
       const auto label = static_cast<std::int64_t>(item.labels[i]);
       const bool dynamic =
           label > 0 && std::binary_search(dynamic_ids.begin(), dynamic_ids.end(), label);
       counts.add_point(label, dynamic, filtered.scan.valid(i));
+      if (errors)
+        errors->add(world_from_sensor, item.scan.point(i), dynamic, filtered.scan.valid(i));
     }
   }
   return counts;
@@ -357,8 +400,13 @@ void run_eval(const EvalOptions& o) {
                            std::to_string(o.tracks.size()) +
                            " times: give one tracks file per sequence, in the same order");
   }
+  if (!o.map_errors_png.empty() && (o.filtered.size() != 1)) {
+    throw core::InputError(
+        "--map-errors-png needs --filtered and exactly one sequence (one picture per run)");
+  }
   const bool mot = o.format == "motchallenge";
   std::vector<SequenceResult> sequences;
+  MapErrorPoints errors;
   eval::MotSummary overall;
   eval::MotSummary overall_moving;
   eval::MapCounts overall_map;
@@ -376,12 +424,19 @@ void run_eval(const EvalOptions& o) {
       if (mot)
         throw core::InputError(
             "--filtered: map metrics need ringtrack sequences, not MOTChallenge");
-      s.map = evaluate_filtered(fs::path(gt_path).parent_path(), gt_path, o.filtered[k]);
+      s.map = evaluate_filtered(fs::path(gt_path).parent_path(), gt_path, o.filtered[k],
+                                o.map_errors_png.empty() ? nullptr : &errors);
       overall_map += *s.map;
     }
     sequences.push_back(std::move(s));
   }
 
+  if (!o.map_errors_png.empty()) {
+    // The points go beside the picture as PLY (intensity = kind), which the script draws.
+    const fs::path ply = fs::path(o.map_errors_png).replace_extension(".ply");
+    errors.write_ply(ply);
+    run_plot_script("plot_map_errors.py", {ply, o.map_errors_png});
+  }
   if (!o.json) {
     print_text(sequences, overall, overall_moving, o);
     if (!o.filtered.empty()) {
@@ -497,6 +552,11 @@ void register_eval(CLI::App& app) {
       "--filtered", o->filtered,
       "per sequence: the filtered/ folder of `ringtrack run --filtered-scans`; adds the "
       "map metrics (preservation and rejection rates, docs/evaluation.md)");
+  cmd->add_option("--map-errors-png", o->map_errors_png,
+                  "with --filtered and one sequence: a top-down picture of the filter's errors, "
+                  "dynamic points kept (red) and static points removed (blue) over the static "
+                  "points kept (grey), and the points as PLY beside it (needs "
+                  "python3-matplotlib)");
   cmd->callback([o] {
     if (o->all_hypotheses) o->hypotheses = "all";
     run_eval(*o);

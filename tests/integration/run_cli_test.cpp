@@ -143,6 +143,56 @@ TEST_F(RunCli, FilteredScansGiveMapMetricsInEval) {
   EXPECT_NE(bad.err.find("000005.pcd"), std::string::npos) << bad.err;
 }
 
+// The fourth property (intensity) of every vertex of a binary PLY written by ringtrack.
+std::vector<float> ply_intensities(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::size_t n = 0;
+  for (std::string line; std::getline(in, line) && line != "end_header";) {
+    if (line.rfind("element vertex ", 0) == 0) n = std::stoul(line.substr(15));
+  }
+  std::vector<float> xyzi(4 * n);
+  in.read(reinterpret_cast<char*>(xyzi.data()), static_cast<std::streamsize>(4 * xyzi.size()));
+  std::vector<float> out;
+  for (std::size_t i = 0; i < n; ++i) out.push_back(xyzi[4 * i + 3]);
+  return out;
+}
+
+long long json_count(const std::string& json, const std::string& key) {
+  const auto at = json.find("\"" + key + "\": ");
+  return at == std::string::npos ? -1 : std::stoll(json.substr(at + key.size() + 4));
+}
+
+TEST_F(RunCli, MapErrorPictureHoldsExactlyTheFiltersErrors) {
+  if (!have_matplotlib()) GTEST_SKIP() << "python3-matplotlib is not installed";
+  const std::string out = dir_ + "/out-errors";
+  ASSERT_EQ(run_command(kCli + " run " + dir_ + "/seq --out " + out +
+                        " --filtered-scans --quiet --no-plots")
+                .exit_code,
+            0);
+  const auto r = run_command(kCli + " eval --json --gt " + dir_ + "/seq --tracks " + out +
+                             "/tracks.csv --filtered " + out + "/filtered --map-errors-png " + out +
+                             "/errors.png");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(png_size(out + "/errors.png"), std::make_pair(880u, 825u));
+  // The points beside the picture: kind 1 = dynamic kept, 2 = static removed; as many as the
+  // map metrics count.
+  const auto kinds = ply_intensities(out + "/errors.ply");
+  const auto count = [&](float k) {
+    return static_cast<long long>(std::count(kinds.begin(), kinds.end(), k));
+  };
+  const auto m = r.out.substr(r.out.find("\"overall_map\""));
+  EXPECT_EQ(count(1.0f), json_count(m, "dynamic_points") - json_count(m, "dynamic_removed"));
+  EXPECT_EQ(count(2.0f), json_count(m, "static_points") - json_count(m, "static_kept"));
+  EXPECT_GT(count(0.0f), 1000);  // the scene
+  // One picture per run: two sequences are refused.
+  const auto two =
+      run_command(kCli + " eval --gt " + dir_ + "/seq --gt " + dir_ + "/seq --tracks " + out +
+                  "/tracks.csv --tracks " + out + "/tracks.csv --filtered " + out +
+                  "/filtered --filtered " + out + "/filtered --map-errors-png " + out + "/e2.png");
+  EXPECT_EQ(two.exit_code, 1);
+  EXPECT_NE(two.err.find("--map-errors-png"), std::string::npos) << two.err;
+}
+
 TEST_F(RunCli, MissingInputIsOneLineError) {
   const auto r = run_command(kCli + " run " + dir_ + "/nothing-here --out " + dir_ + "/o2");
   EXPECT_EQ(r.exit_code, 1);
