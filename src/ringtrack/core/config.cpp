@@ -355,6 +355,11 @@ class Schema {
     number("box_margin_m", m.box_margin_m, 0.0, 10.0,
            "hypothesis boxes grow by this on every side before the points inside them are "
            "removed (m)");
+    number("object_margin_m", m.object_margin_m, 0.0, 10.0,
+           "the box of a dynamic hypothesis in the scan that measured it grows by this sideways "
+           "and upward (not downward: the ground under its feet) and every point inside leaves "
+           "that scan, segmented or not (a head above the cluster, an arm beside it); 0 removes "
+           "only its detection's cells (m)");
 
     auto& b = c.background;
     section_ = "background";

@@ -127,9 +127,11 @@ struct TrackingConfig {
 
 /// Dynamic-object filter and static map (paper III.E).
 struct MappingConfig {
-  int log_delay_scans{50};   // filtered scans wait this many scans in the log before the map
-  double voxel_size_m{0.1};  // static-map voxel edge (one point per voxel)
-  double box_margin_m{0.1};  // boxes grow by this before points inside them are removed
+  int log_delay_scans{50};      // filtered scans wait this many scans in the log before the map
+  double voxel_size_m{0.1};     // static-map voxel edge (one point per voxel)
+  double box_margin_m{0.1};     // boxes grow by this before points inside them are removed
+  double object_margin_m{0.2};  // a measured dynamic box grows by this sideways and up, and every
+                                // point inside leaves its scan (0: only its detection's cells)
 };
 
 /// Background range model of a static sensor (core::BackgroundRangeModel, docs/visibility.md):

@@ -40,10 +40,11 @@ struct LoggedScan {
   static constexpr std::size_t kBlockPoints = 64;
   /// Recomputes block_bounds from points (call it after changing points).
   void update_bounds();
-  /// Marks the points inside box removed; returns how many were newly removed. Skips blocks
-  /// whose bounds miss the box when the bounds were computed for as many points as there are
-  /// now, else tests every point.
-  std::size_t remove_inside(const core::Box3& box);
+  /// Marks the points inside box removed; returns how many were newly removed, and appends
+  /// their cells to removed_cells when given. Skips blocks whose bounds miss the box when the
+  /// bounds were computed for as many points as there are now, else tests every point.
+  std::size_t remove_inside(const core::Box3& box,
+                            std::vector<std::uint32_t>* removed_cells = nullptr);
 };
 
 /// What the filter did in one call.
@@ -51,6 +52,8 @@ struct FilterResult {
   std::uint64_t sequence{0};                 ///< of the scan just processed
   std::vector<std::uint32_t> removed_cells;  ///< its cells removed (dynamic detections)
   std::size_t retroactive_points{0};         ///< points removed from earlier scans still in the log
+  /// Points of this scan removed for lying in a dynamic object's grown box, not in its cells.
+  std::size_t object_box_points{0};
   std::size_t map_voxels_removed{
       0};                       ///< voxels removed from the map (decisions too late for the log)
   std::size_t scans_to_map{0};  ///< scans that left the log into the map
@@ -98,6 +101,8 @@ class DynamicObjectFilter {
   };
 
   void remove_box(std::uint64_t sequence, const core::Box3& box);
+  // Removes the points inside a measured dynamic box grown by object_margin_m (not downward).
+  void remove_object_box(LoggedScan& scan, const core::Box3& box);
   [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;
   void release_front();
 

@@ -347,6 +347,58 @@ TEST(DynamicObjectFilter, RemovedCellsAreTheDynamicDetections) {
   }
 }
 
+// A walker whose detection misses its top rings (its head): the grown box removes them from the
+// scan, and only them; without the margin they stay.
+std::size_t head_cells_kept(double object_margin_m) {
+  core::MappingConfig mapping;
+  mapping.object_margin_m = object_margin_m;
+  tracking::Tracker tracker{core::TrackingConfig{}};
+  DynamicObjectFilter filter(mapping);
+  // The top ring (rings are 0.25 m apart here: the person's top ring lies 0.25 m above the
+  // detection's).
+  const float cut_z = static_cast<float>(kGroundZ + kPersonHeight - 0.1);
+  std::size_t kept = 0;
+  for (int k = 0; k < 40; ++k) {
+    const Frame frame = render({{-2.0 + 0.1 * k, -2.0, 1}}, sensor_pose(k));
+    auto detections = detect(frame, {1});
+    std::vector<std::uint32_t> head;
+    for (auto& d : detections) {
+      std::erase_if(d.indices, [&](std::uint32_t i) {
+        const bool is_head = frame.pose.to_world(frame.scan.point(i)).z() > cut_z;
+        if (is_head) head.push_back(i);
+        return is_head;
+      });
+      d.box = {};
+      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
+    }
+    const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
+    const auto& r = filter.process(frame.scan, frame.pose, detections, hypotheses);
+    if (hypotheses.empty() || !hypotheses.front().ever_dynamic) continue;
+    // The removed cells are the detection's and the head's, nothing else (no wall, no ground).
+    std::vector<std::uint32_t> expected = detections.front().indices;
+    std::vector<std::uint32_t> head_removed;
+    for (const auto c : head) {
+      if (std::find(r.removed_cells.begin(), r.removed_cells.end(), c) != r.removed_cells.end()) {
+        head_removed.push_back(c);
+      }
+    }
+    kept += head.size() - head_removed.size();
+    expected.insert(expected.end(), head_removed.begin(), head_removed.end());
+    auto got = r.removed_cells;
+    std::sort(got.begin(), got.end());
+    std::sort(expected.begin(), expected.end());
+    EXPECT_EQ(got, expected) << "scan " << k;
+    EXPECT_EQ(r.object_box_points, head_removed.size()) << "scan " << k;
+  }
+  return kept;
+}
+
+TEST(DynamicObjectFilter, GrownObjectBoxRemovesTheUnclusteredHead) {
+  EXPECT_EQ(head_cells_kept(0.3), 0u);
+  EXPECT_GT(head_cells_kept(0.2), 20u);  // a ring spacing above the margin: out of reach
+  EXPECT_GT(head_cells_kept(0.0), 20u);
+}
+
 TEST(DynamicObjectFilter, MemoryStaysBoundedOnALongStaticRun) {
   core::MappingConfig mapping;
   mapping.log_delay_scans = 30;
