@@ -164,7 +164,7 @@ BENCHMARK(BM_McapSinkScanPaced)
     ->Unit(benchmark::kMillisecond)
     ->UseManualTime();
 
-// A ROS 2 MCAP bag (our writer, profile ros2, zstd chunks) of 20 VLP-16 revolutions.
+// A ROS 2 MCAP bag (our writer, profile ros2, zstd chunks) of 20 s of VLP-16 packets: 200 scans.
 void BM_McapBagReadVelodyneScan(benchmark::State& state) {
   test::VelodyneEncoderOptions eo;
   const test::VelodyneEncoder enc(eo);
