@@ -1,6 +1,17 @@
-# Small MCAP files as seeds for fuzz_mcap_reader: byte 0 is the fuzz target's control byte
-# (0: raw input with summary, 2: without), then a whole file with chunks compressed none/lz4/zstd.
-import struct, subprocess, zlib, sys, os
+#!/usr/bin/python3
+# Seeds for fuzz/fuzz_mcap_reader.cpp: small complete MCAP files (one chunk of a schema, a channel
+# and three messages; its Message Index; a Metadata record; Data End with the data CRC; a summary
+# with Statistics, Chunk and Metadata Indexes; the summary CRC), one per chunk compression (none,
+# lz4 and zstd, by the zstd and lz4 command-line tools), each behind the target's control byte
+# (0: read with the summary, 2: without). Without them the fuzzer seldom builds a valid lz4 or
+# zstd frame, so decompression and the index paths stay unexplored. The files pass @mcap/core
+# (tests/mcap/validate_mcap.cjs). Usage: make_fuzz_seeds.py OUTPUT_FOLDER
+import os
+import struct
+import subprocess
+import sys
+import zlib
+
 out = sys.argv[1]
 MAGIC = b"\x89MCAP0\r\n"
 def rec(op, body): return bytes([op]) + struct.pack("<Q", len(body)) + body

@@ -474,7 +474,7 @@ struct McapReader::Impl {
     }
     chunk_at = 0;
     chunk_offset = offset;
-    in_chunk = true;
+    in_chunk = !chunk_records.empty();  // a chunk may hold no records
   }
 
   bool message(Fields& f, std::uint64_t offset, McapMessage& out) {

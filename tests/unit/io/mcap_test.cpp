@@ -272,7 +272,8 @@ TEST(McapWriter, DestroyedWithoutCloseLeavesNoFile) {
 
 // A file without chunks, index or summary, built record by record: a Header, a Schema, a
 // Channel and Messages in the data section, a Data End without CRC and an empty Footer.
-std::vector<std::uint8_t> unchunked_file(int messages) {
+// With `empty_chunk`, a Chunk record without records precedes the messages.
+std::vector<std::uint8_t> unchunked_file(int messages, bool empty_chunk = false) {
   mcap::Buffer b;
   b.raw(mcap::kMagic);
   auto r = b.begin_record(mcap::Op::kHeader);
@@ -292,6 +293,16 @@ std::vector<std::uint8_t> unchunked_file(int messages) {
   b.string("cdr");
   b.u32(0);
   b.end_record(r);
+  if (empty_chunk) {
+    r = b.begin_record(mcap::Op::kChunk);
+    b.u64(0);  // start and end time
+    b.u64(0);
+    b.u64(0);  // uncompressed size
+    b.u32(0);  // CRC
+    b.string("");
+    b.u64(0);  // records
+    b.end_record(r);
+  }
   for (int k = 0; k < messages; ++k) {
     r = b.begin_record(mcap::Op::kMessage);
     b.u16(7);
@@ -311,6 +322,15 @@ std::vector<std::uint8_t> unchunked_file(int messages) {
   b.end_record(r);
   b.raw(mcap::kMagic);
   return {b.bytes().begin(), b.bytes().end()};
+}
+
+// The specification allows a chunk without records; the reader once failed on it ("opcode runs
+// past the record's end" at byte 0 of its records).
+TEST(McapReader, AnEmptyChunkHoldsNoMessages) {
+  const auto bytes = unchunked_file(3, true);
+  McapReader r(bytes, "empty-chunk.mcap");
+  EXPECT_EQ(read_messages(r, nullptr).size(), 3u);
+  EXPECT_EQ(r.message_count(7), 3u);
 }
 
 TEST(McapReader, ReadsFilesWithoutChunksOrSummary) {
