@@ -1,8 +1,9 @@
 // libFuzzer target: the MCAP reader over bytes in memory. Input byte 0 selects the raw input
 // (bit 0 clear) or the input behind a valid magic and Header record, so that most inputs reach
-// the record parser, chunk decompression (none, lz4, zstd) and the summary; bit 1 reads without
-// the summary. Documented errors (core::InputError) are fine; crashes, leaks and sanitizer
-// reports are bugs. Chunks are limited to 1 MiB so that a claimed size cannot exhaust memory.
+// the record parser, chunk decompression (none, lz4, zstd) and the summary (with the Chunk and
+// Message Indexes it points to); bit 1 reads without the summary. Documented errors
+// (core::InputError) are fine; crashes, leaks and sanitizer reports are bugs. Chunks are limited to
+// 1 MiB so that a claimed size cannot exhaust memory.
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -34,6 +35,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::size_t bytes = 0;
     while (reader.next(message)) bytes += message.data.size();
     for (const auto& channel : reader.channels()) bytes += reader.message_count(channel.id);
+    // The index API reads at offsets the summary claims: every one must be checked.
+    for (const auto& chunk : reader.chunk_indexes()) {
+      for (const auto& [channel, entries] : reader.message_indexes(chunk)) bytes += entries.size();
+    }
     if (bytes == 0xFFFFFFFF) return 1;  // keeps the loop from being optimized away
   } catch (const core::InputError&) {
   }

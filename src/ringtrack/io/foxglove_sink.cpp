@@ -107,13 +107,16 @@ void FoxgloveSink::write_transform(const core::Pose& pose) {
   writer_.write_message(transform_channel_, log_time(stamp_ns_), log_time(stamp_ns_), w.bytes());
 }
 
-void FoxgloveSink::write_cloud(const core::OrganizedScan& scan,
-                               const pipeline::FrameResult& result) {
-  // Per-cell labels: the detection (index + 1) and the reported track holding each cell.
-  const std::size_t cells = scan.size();
-  cell_track_.assign(cells, 0);
-  cell_detection_.assign(cells, 0);
-  cell_removed_.assign(cells, 0);
+// The per-cell label arrays stay zero between scans: only the cells of detections and the
+// removed cells are set, and reset once the cloud is written, so a scan costs its labelled cells
+// rather than clearing three arrays of every cell.
+void FoxgloveSink::label_cells(const pipeline::FrameResult& result, std::size_t cells) {
+  if (cell_track_.size() != cells) {
+    cell_track_.assign(cells, 0);
+    cell_detection_.assign(cells, 0);
+    cell_removed_.assign(cells, 0);
+  }
+  labelled_.clear();
   std::vector<std::uint32_t> detection_track(result.detections.size(), 0);
   for (const auto& h : result.hypotheses) {
     if (h.reported && h.detection >= 0 &&
@@ -128,18 +131,37 @@ void FoxgloveSink::write_cloud(const core::OrganizedScan& scan,
       if (cell >= cells) return;
       cell_detection_[cell] = label;
       cell_track_[cell] = detection_track[k];
+      labelled_.push_back(cell);
     };
     for (const auto cell : result.detections[k].indices) mark(cell);
     for (const auto cell : result.detections[k].completion) mark(cell);
   }
   for (const auto cell : result.removed_cells) {
-    if (cell < cells) cell_removed_[cell] = 1;
+    if (cell >= cells) continue;
+    cell_removed_[cell] = 1;
+    labelled_.push_back(cell);
   }
+}
 
+void FoxgloveSink::clear_labels() {
+  for (const auto cell : labelled_) {
+    cell_track_[cell] = 0;
+    cell_detection_[cell] = 0;
+    cell_removed_[cell] = 0;
+  }
+  labelled_.clear();
+}
+
+void FoxgloveSink::write_cloud(const core::OrganizedScan& scan,
+                               const pipeline::FrameResult& result) {
+  const std::size_t cells = scan.size();
+  label_cells(result, cells);
+
+  // The message's small fields go to message_; the points are written straight into the MCAP
+  // chunk (add_message), so the ~300 kB of a VLP-16 scan are written once, not copied.
   const std::size_t points = scan.valid_count();
   ProtoWriter& w = message_;
   w.clear();
-  w.reserve_more(256 + points * kMcapScanPointStride);
   fg::timestamp(w, 1, stamp_ns_);
   w.string(2, options_.sensor_frame);
   fg::pose(w, 3, Eigen::Vector3d::Zero());
@@ -153,7 +175,11 @@ void FoxgloveSink::write_cloud(const core::OrganizedScan& scan,
   fg::packed_field(w, 5, "segment", 22, fg::NumericType::kUint8);
   fg::packed_field(w, 5, "removed", 23, fg::NumericType::kUint8);
   w.bytes_header(6, points * kMcapScanPointStride);
-  std::uint8_t* p = w.grow(points * kMcapScanPointStride);
+  const auto head = w.bytes();
+  const auto out = writer_.add_message(scan_channel_, log_time(stamp_ns_), log_time(stamp_ns_),
+                                       head.size() + points * kMcapScanPointStride);
+  std::memcpy(out.data(), head.data(), head.size());
+  std::uint8_t* p = out.data() + head.size();
   const auto& xs = scan.xs();
   const auto& ys = scan.ys();
   const auto& zs = scan.zs();
@@ -171,7 +197,7 @@ void FoxgloveSink::write_cloud(const core::OrganizedScan& scan,
     p[23] = cell_removed_[i];
     p += kMcapScanPointStride;
   }
-  writer_.write_message(scan_channel_, log_time(stamp_ns_), log_time(stamp_ns_), w.bytes());
+  clear_labels();
   stats_.points += points;
 }
 

@@ -68,6 +68,8 @@ class FoxgloveSink {
                    const pipeline::FrameResult& result, const mapping::StaticMap& map);
   /// Writes the final static map at `stamp_ns` and closes the file (complete only then).
   void finish(const mapping::StaticMap& map, std::int64_t stamp_ns);
+  /// Waits until the writer's worker thread has written what it was handed (benchmarks).
+  void wait_idle() { writer_.wait_idle(); }
 
   /// Counts so far.
   [[nodiscard]] const FoxgloveSinkStats& stats() const { return stats_; }
@@ -75,6 +77,8 @@ class FoxgloveSink {
   [[nodiscard]] const McapWriterStats& mcap_stats() const { return writer_.stats(); }
 
  private:
+  void label_cells(const pipeline::FrameResult& result, std::size_t cells);
+  void clear_labels();
   void write_cloud(const core::OrganizedScan& scan, const pipeline::FrameResult& result);
   void write_transform(const core::Pose& pose);
   void write_tracks(const pipeline::FrameResult& result);
@@ -89,6 +93,7 @@ class FoxgloveSink {
   std::vector<std::uint32_t> cell_track_;  // per cell of the current scan
   std::vector<std::uint16_t> cell_detection_;
   std::vector<std::uint8_t> cell_removed_;
+  std::vector<std::uint32_t> labelled_;  // cells whose labels are set (reset after each cloud)
   std::unordered_map<std::uint64_t, std::deque<Eigen::Vector3d>> trajectories_;
   std::int64_t stamp_ns_{0};
   FoxgloveSinkStats stats_;

@@ -46,7 +46,10 @@ enum class Op : std::uint8_t {
 const char* op_name(std::uint8_t op);
 
 /// CRC-32 (IEEE 802.3, as zlib's crc32) of `data` continuing from `crc` (0 to start).
+/// Uses carry-less multiplication (PCLMULQDQ) when the CPU has it, else slicing-by-8 tables.
 std::uint32_t crc32(std::span<const std::uint8_t> data, std::uint32_t crc = 0);
+/// The same with the tables only (the path of CPUs without PCLMULQDQ; for tests and benchmarks).
+std::uint32_t crc32_portable(std::span<const std::uint8_t> data, std::uint32_t crc = 0);
 
 /// Appends little-endian fields to a byte vector, the MCAP serialization of each type.
 class Buffer {
@@ -67,6 +70,9 @@ class Buffer {
   void u64(std::uint64_t v) { put(v); }
   /// Raw bytes without a prefix.
   void raw(std::span<const std::uint8_t> data) { bytes_.append(data.data(), data.size()); }
+  /// Appends n bytes left for the caller to fill; returns where they start (valid until the
+  /// next append).
+  std::uint8_t* grow(std::size_t n) { return bytes_.grow(n); }
   /// String: uint32 byte length, then the bytes.
   void string(std::string_view s);
   /// Starts a record: opcode and a placeholder length; returns the position for end_record().

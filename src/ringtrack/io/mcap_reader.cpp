@@ -150,6 +150,7 @@ struct McapReader::Impl {
   std::vector<McapChannel> channels;
   std::map<std::uint16_t, std::uint64_t> counts;
   bool used_summary{false};
+  std::vector<McapChunkIndex> chunk_indexes;
   bool complete{false};  // the file ends with a footer and the magic: no cut-off tolerated
   std::string warning;
 
@@ -246,6 +247,9 @@ struct McapReader::Impl {
         case Op::kChannel:
           add_channel(content);
           break;
+        case Op::kChunkIndex:
+          chunk_indexes.push_back(chunk_index(content));
+          break;
         case Op::kStatistics: {
           content.u64("message_count");
           content.u16("schema_count");
@@ -269,7 +273,74 @@ struct McapReader::Impl {
       }
     }
     used_summary = statistics;
+    if (!statistics) chunk_indexes.clear();
     return statistics;
+  }
+
+  static McapChunkIndex chunk_index(Fields& f) {
+    McapChunkIndex c;
+    c.message_start_time_ns = f.u64("message_start_time");
+    c.message_end_time_ns = f.u64("message_end_time");
+    c.chunk_offset = f.u64("chunk_start_offset");
+    c.chunk_length = f.u64("chunk_length");
+    const std::uint32_t map_bytes = f.u32("message_index_offsets");
+    if (map_bytes % 10 != 0) {
+      f.fail("message_index_offsets of " + std::to_string(map_bytes) +
+             " bytes is not a whole number of (uint16, uint64) entries");
+    }
+    for (std::uint32_t k = 0; k < map_bytes / 10; ++k) {
+      const std::uint16_t channel = f.u16("channel id");
+      c.message_index_offsets.emplace_back(channel, f.u64("offset"));
+    }
+    c.message_index_length = f.u64("message_index_length");
+    c.compression = f.string("compression");
+    c.compressed_size = f.u64("compressed_size");
+    c.uncompressed_size = f.u64("uncompressed_size");
+    return c;
+  }
+
+  // The Message Index records of one chunk, read where its Chunk Index says they are.
+  std::vector<std::pair<std::uint16_t, std::vector<McapIndexEntry>>> message_indexes(
+      const McapChunkIndex& index) {
+    std::vector<std::pair<std::uint16_t, std::vector<McapIndexEntry>>> out;
+    ByteBuffer buf;
+    for (const auto& [channel, offset] : index.message_index_offsets) {
+      const std::string where = at("Message Index", offset);
+      const std::uint64_t size = source->size();
+      if (offset > size || size - offset < mcap::kRecordPrefixBytes) {
+        fail("Chunk Index of the chunk at offset " + std::to_string(index.chunk_offset) +
+             ": Message Index offset " + std::to_string(offset) +
+             " lies past the end of the file (" + std::to_string(size) + " bytes)");
+      }
+      Fields prefix(source->read(offset, mcap::kRecordPrefixBytes, buf), where);
+      const std::uint8_t op = prefix.u8("opcode");
+      const std::uint64_t length = prefix.u64("length");
+      if (op != static_cast<std::uint8_t>(Op::kMessageIndex)) {
+        prefix.fail(std::string("expected a Message Index record, found opcode ") +
+                    std::to_string(op) + " (" + mcap::op_name(op) + ")");
+      }
+      if (length > size - offset - mcap::kRecordPrefixBytes) {
+        prefix.fail("length " + std::to_string(length) + " runs past the end of the file");
+      }
+      Fields f(
+          source->read(offset + mcap::kRecordPrefixBytes, static_cast<std::size_t>(length), buf),
+          where);
+      const std::uint16_t id = f.u16("channel_id");
+      if (id != channel) {
+        f.fail("channel " + std::to_string(id) + ", the Chunk Index says " +
+               std::to_string(channel));
+      }
+      Fields records(f.take(f.u32("records"), "records"), where + ", records");
+      std::vector<McapIndexEntry> entries;
+      while (records.remaining() > 0) {
+        McapIndexEntry e;
+        e.log_time_ns = records.u64("log_time");
+        e.offset = records.u64("offset");
+        entries.push_back(e);
+      }
+      out.emplace_back(channel, std::move(entries));
+    }
+    return out;
   }
 
   void add_schema(Fields& f) {
@@ -403,7 +474,7 @@ struct McapReader::Impl {
     }
     chunk_at = 0;
     chunk_offset = offset;
-    in_chunk = true;
+    in_chunk = !chunk_records.empty();  // a chunk may hold no records
   }
 
   bool message(Fields& f, std::uint64_t offset, McapMessage& out) {
@@ -442,6 +513,8 @@ struct McapReader::Impl {
         add_channel(content);
         return false;
       case Op::kMessage:
+        out.in_chunk = true;
+        out.offset_in_chunk = begin;
         return message(content, chunk_offset, out);
       default:
         return false;  // other records do not belong in chunks: ignored
@@ -506,6 +579,8 @@ struct McapReader::Impl {
           add_channel(f);
           break;
         case Op::kMessage:
+          out.in_chunk = false;
+          out.offset_in_chunk = 0;
           return message(f, offset, out);
         case Op::kChunk:
           open_chunk(f, offset);
@@ -556,6 +631,15 @@ std::uint64_t McapReader::message_count(std::uint16_t channel_id) const {
 
 bool McapReader::used_summary() const {
   return impl_->used_summary;
+}
+
+const std::vector<McapChunkIndex>& McapReader::chunk_indexes() const {
+  return impl_->chunk_indexes;
+}
+
+std::vector<std::pair<std::uint16_t, std::vector<McapIndexEntry>>> McapReader::message_indexes(
+    const McapChunkIndex& chunk) {
+  return impl_->message_indexes(chunk);
 }
 
 bool McapReader::next(McapMessage& out) {

@@ -40,6 +40,28 @@ struct McapMessage {
   std::uint64_t publish_time_ns{0};    ///< when it was published
   std::span<const std::uint8_t> data;  ///< payload; valid until the reader's next call
   std::uint64_t offset{0};             ///< file offset of the record, or of the chunk holding it
+  bool in_chunk{false};                ///< read from a chunk
+  std::uint64_t offset_in_chunk{0};    ///< in_chunk: the record's offset in the chunk's records
+};
+
+/// A Chunk Index record of the summary: where a chunk and its Message Index records are.
+struct McapChunkIndex {
+  std::uint64_t message_start_time_ns{0};  ///< earliest log time in the chunk
+  std::uint64_t message_end_time_ns{0};    ///< latest log time in the chunk
+  std::uint64_t chunk_offset{0};           ///< file offset of the Chunk record
+  std::uint64_t chunk_length{0};           ///< bytes of the Chunk record (opcode and length too)
+  /// Per channel: the file offset of its Message Index record.
+  std::vector<std::pair<std::uint16_t, std::uint64_t>> message_index_offsets;
+  std::uint64_t message_index_length{0};  ///< bytes of all the chunk's Message Index records
+  std::string compression;                ///< "", "lz4" or "zstd"
+  std::uint64_t compressed_size{0};       ///< bytes of the chunk's records as stored
+  std::uint64_t uncompressed_size{0};     ///< bytes of the chunk's records uncompressed
+};
+
+/// One Message Index entry: a message's log time and its record's offset in the chunk's records.
+struct McapIndexEntry {
+  std::uint64_t log_time_ns{0};  ///< the message's log time
+  std::uint64_t offset{0};       ///< offset in the uncompressed records of the chunk
 };
 
 /// Options of an McapReader.
@@ -75,6 +97,12 @@ class McapReader {
   [[nodiscard]] std::uint64_t message_count(std::uint16_t channel_id) const;
   /// True when channels and counts came from a valid summary (with a Statistics record).
   [[nodiscard]] bool used_summary() const;
+  /// The summary's Chunk Index records in file order (empty when the summary was not used).
+  [[nodiscard]] const std::vector<McapChunkIndex>& chunk_indexes() const;
+  /// The Message Index records a Chunk Index points to: per channel, its entries. Errors
+  /// (core::InputError) name the offset of a record that is not the Message Index expected.
+  std::vector<std::pair<std::uint16_t, std::vector<McapIndexEntry>>> message_indexes(
+      const McapChunkIndex& chunk);
   /// The next message in file order; false at the end (or where a cut-off file ends).
   bool next(McapMessage& out);
   /// Starts reading from the first message again.

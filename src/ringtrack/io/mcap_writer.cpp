@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <condition_variable>
+#include <cstring>
 #include <deque>
 #include <exception>
 #include <limits>
@@ -97,6 +98,7 @@ struct McapWriter::Impl {
   std::deque<ChunkJob> queue;
   std::vector<ChunkJob> spare;  // emptied jobs whose buffers are reused
   bool stopping{false};
+  bool busy{false};  // the worker is writing a job it took from the queue
   std::exception_ptr error;
   bool closed{false};
 
@@ -201,6 +203,7 @@ struct McapWriter::Impl {
       if (queue.empty()) return;
       ChunkJob job = std::move(queue.front());
       queue.pop_front();
+      busy = true;
       lock.unlock();
       try {
         if (!error) write_job(job);
@@ -217,6 +220,7 @@ struct McapWriter::Impl {
       job.metadata_name.clear();
       job.start_ns = job.end_ns = 0;
       spare.push_back(std::move(job));
+      busy = false;
       changed.notify_all();
     }
   }
@@ -346,20 +350,28 @@ std::uint16_t McapWriter::add_channel(std::uint16_t schema_id, std::string_view 
 
 void McapWriter::write_message(std::uint16_t channel_id, std::uint64_t log_time_ns,
                                std::uint64_t publish_time_ns, std::span<const std::uint8_t> data) {
+  const auto out = add_message(channel_id, log_time_ns, publish_time_ns, data.size());
+  if (!data.empty()) std::memcpy(out.data(), data.data(), data.size());
+}
+
+std::span<std::uint8_t> McapWriter::add_message(std::uint16_t channel_id, std::uint64_t log_time_ns,
+                                                std::uint64_t publish_time_ns, std::size_t size) {
   Impl& m = *impl_;
   if (channel_id >= m.sequence.size()) {
     m.fail("message on unknown channel " + std::to_string(channel_id));
   }
+  // A full chunk is closed here, before the next message, rather than after the last one: the
+  // caller is still filling that message's payload inside the chunk when add_message returns.
+  if (m.current.records.size() >= m.options.chunk_bytes) m.flush_chunk();
   ChunkJob& c = m.current;
   const std::uint64_t position = c.records.size();
-  // The record is written field by field into the chunk: one copy of the payload.
   c.records.u8(static_cast<std::uint8_t>(Op::kMessage));
-  c.records.u64(2 + 4 + 8 + 8 + data.size());
+  c.records.u64(2 + 4 + 8 + 8 + size);
   c.records.u16(channel_id);
   c.records.u32(m.sequence[channel_id]++);
   c.records.u64(log_time_ns);
   c.records.u64(publish_time_ns);
-  c.records.raw(data);
+  std::uint8_t* payload = c.records.grow(size);
   m.stats.uncompressed_bytes += c.records.size() - position;
   int& slot = m.current_slot[channel_id];
   if (slot < 0) {
@@ -377,7 +389,14 @@ void McapWriter::write_message(std::uint16_t channel_id, std::uint64_t log_time_
   m.last_ns = std::max(m.last_ns, log_time_ns);
   ++m.channel_messages[channel_id];
   ++m.stats.messages;
-  if (c.records.size() >= m.options.chunk_bytes) m.flush_chunk();
+  return {payload, size};
+}
+
+void McapWriter::wait_idle() {
+  Impl& m = *impl_;
+  std::unique_lock lock(m.mutex);
+  m.changed.wait(lock, [&] { return (m.queue.empty() && !m.busy) || m.error; });
+  if (m.error) std::rethrow_exception(m.error);
 }
 
 void McapWriter::write_metadata(std::string_view name, const McapStringMap& entries) {

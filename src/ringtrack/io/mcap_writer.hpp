@@ -35,7 +35,9 @@ struct McapWriterOptions {
   std::string library{"ringtrack"};                     ///< Header library: who wrote the file
   McapCompression compression{McapCompression::kZstd};  ///< of every chunk
   std::size_t chunk_bytes{std::size_t{1} << 20};        ///< uncompressed bytes that close a chunk
-  int zstd_level{1};  ///< Zstandard level (1 is fast; higher levels rarely pay for point clouds)
+  /// Zstandard level. -3 (zstd's "--fast=3") compresses a VLP-16 scan cloud 2.16:1 at about a
+  /// third less CPU than level 1 (2.31:1); see docs/BENCHMARK.md, "MCAP".
+  int zstd_level{-3};
   /// Compress, checksum and write chunks on a worker thread, so that the caller pays only for
   /// copying its messages (see docs/visualisation.md, "Cost").
   bool background{true};
@@ -72,11 +74,19 @@ class McapWriter {
   /// decrease (chunk and statistics time ranges take the minimum and maximum either way).
   void write_message(std::uint16_t channel_id, std::uint64_t log_time_ns,
                      std::uint64_t publish_time_ns, std::span<const std::uint8_t> data);
+  /// The same for a payload of `size` bytes that the caller writes into the returned span, in
+  /// the chunk itself, before its next call on this writer: a large payload (a scan's point
+  /// cloud) is then written once instead of encoded elsewhere and copied in.
+  std::span<std::uint8_t> add_message(std::uint16_t channel_id, std::uint64_t log_time_ns,
+                                      std::uint64_t publish_time_ns, std::size_t size);
   /// Writes a Metadata record (outside chunks, as the specification requires).
   void write_metadata(std::string_view name, const McapStringMap& entries);
   /// Writes the last chunk, the Data End, the summary and the Footer, and closes the file; the
   /// file is complete only when this returns.
   void close();
+  /// Waits until the worker thread has written every chunk handed to it so far (the chunk being
+  /// filled stays open). Benchmarks use it to measure the caller's cost without backpressure.
+  void wait_idle();
 
   /// Counts so far (file_bytes after close).
   [[nodiscard]] const McapWriterStats& stats() const;

@@ -5,17 +5,25 @@
 // The writer's output is also checked by the reference library in
 // tests/integration/run_mcap_cli_test.cpp.
 #include <gtest/gtest.h>
+#include <zlib.h>
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <random>
+#include <set>
 #include <string>
 #include <vector>
 
 #include "io_test_util.hpp"
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/foxglove_sink.hpp"
 #include "ringtrack/io/mcap_format.hpp"
 #include "ringtrack/io/mcap_reader.hpp"
 #include "ringtrack/io/mcap_writer.hpp"
+#include "ringtrack/pipeline/pipeline.hpp"
+#include "ringtrack/sim/scenario.hpp"
+#include "ringtrack/sim/simulator.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -84,6 +92,30 @@ TEST(McapFormat, Crc32HasTheIeeeCheckValue) {
             mcap::crc32({zeros.data() + 3, 997}, mcap::crc32({zeros.data(), 3})));
 }
 
+// zlib's crc32 is the independent oracle for both of our paths (carry-less multiplication
+// folding and the slicing-by-8 tables): every length around the 64- and 16-byte folding steps,
+// every alignment, continued CRCs, and one large buffer (a chunk).
+TEST(McapFormat, Crc32MatchesZlibAtEveryLengthAlignmentAndStart) {
+  std::mt19937 rng(14);
+  std::vector<std::uint8_t> bytes((std::size_t{1} << 20) + 77);
+  for (auto& b : bytes) b = static_cast<std::uint8_t>(rng());
+  const auto zlib = [&](std::size_t at, std::size_t n, std::uint32_t start) {
+    return static_cast<std::uint32_t>(::crc32(start, bytes.data() + at, static_cast<uInt>(n)));
+  };
+  for (std::size_t n = 0; n <= 300; ++n) {
+    for (std::size_t at = 0; at < 16; ++at) {
+      for (const std::uint32_t start : {0U, 0xCBF43926U}) {
+        const std::span<const std::uint8_t> piece{bytes.data() + at, n};
+        ASSERT_EQ(mcap::crc32(piece, start), zlib(at, n, start)) << n << " bytes at " << at;
+        ASSERT_EQ(mcap::crc32_portable(piece, start), zlib(at, n, start)) << n << " at " << at;
+      }
+    }
+  }
+  for (const std::size_t n : {std::size_t{4096}, std::size_t{65'537}, bytes.size() - 5}) {
+    EXPECT_EQ(mcap::crc32({bytes.data() + 5, n}), zlib(5, n, 0)) << n << " bytes";
+  }
+}
+
 struct RoundTripCase {
   McapCompression compression;
   bool background;
@@ -133,6 +165,100 @@ INSTANTIATE_TEST_SUITE_P(Compressions, McapRoundTrip,
                                            RoundTripCase{McapCompression::kZstd, true, 1000},
                                            RoundTripCase{McapCompression::kZstd, false, 1 << 20}));
 
+// Every message of a complete file sits inside a chunk and is indexed, checked through the
+// reader's summary API: the summary has one Chunk Index per chunk written, each message read in
+// file order is in a chunk whose Chunk Index covers its log time, its channel's Message Index
+// of that chunk holds (log time, record offset), and no index entry lacks a message.
+void expect_every_message_indexed(const fs::path& path, std::uint64_t messages,
+                                  std::uint32_t chunks) {
+  McapReader r(path);
+  ASSERT_TRUE(r.used_summary());
+  ASSERT_EQ(r.chunk_indexes().size(), chunks);
+  std::map<std::pair<std::uint64_t, std::uint16_t>,
+           std::multiset<std::pair<std::uint64_t, std::uint64_t>>>
+      indexed;  // (chunk offset, channel) -> (log time, offset in chunk)
+  std::map<std::uint64_t, const McapChunkIndex*> by_offset;
+  std::uint64_t entries = 0;
+  for (const auto& c : r.chunk_indexes()) {
+    by_offset[c.chunk_offset] = &c;
+    for (const auto& [channel, list] : r.message_indexes(c)) {
+      for (const auto& e : list)
+        indexed[{c.chunk_offset, channel}].insert({e.log_time_ns, e.offset});
+      entries += list.size();
+    }
+  }
+  EXPECT_EQ(entries, messages) << "Message Index entries";
+  McapMessage m;
+  std::uint64_t n = 0;
+  while (r.next(m)) {
+    ASSERT_TRUE(m.in_chunk) << "message " << n << " at offset " << m.offset << " is outside chunks";
+    const auto chunk = by_offset.find(m.offset);
+    ASSERT_NE(chunk, by_offset.end())
+        << "message " << n << ": no Chunk Index for the chunk at " << m.offset;
+    EXPECT_GE(m.log_time_ns, chunk->second->message_start_time_ns) << "message " << n;
+    EXPECT_LE(m.log_time_ns, chunk->second->message_end_time_ns) << "message " << n;
+    auto& entries_of_channel = indexed[{m.offset, m.channel_id}];
+    const auto it = entries_of_channel.find({m.log_time_ns, m.offset_in_chunk});
+    ASSERT_NE(it, entries_of_channel.end())
+        << "message " << n << " (chunk at " << m.offset << ", record at " << m.offset_in_chunk
+        << ") is missing from its channel's Message Index";
+    entries_of_channel.erase(it);
+    ++n;
+  }
+  EXPECT_EQ(n, messages);
+  for (const auto& [key, left] : indexed) {
+    EXPECT_TRUE(left.empty()) << left.size() << " index entries without a message in the chunk at "
+                              << key.first;
+  }
+}
+
+// With Metadata records between messages (each closes the chunk being filled, and its job is
+// recycled as a later chunk's: the bug of commit 986b31d wrote messages outside chunks).
+TEST_P(McapRoundTrip, EveryMessageSitsInAnIndexedChunk) {
+  TempDir dir;
+  McapWriterOptions o;
+  o.compression = GetParam().compression;
+  o.background = GetParam().background;
+  o.chunk_bytes = GetParam().chunk_bytes;
+  const auto messages = sample_messages(300);
+  McapWriter w(dir / "i.mcap", o);
+  const auto s = w.add_schema("pkg/msg/A", "ros2msg", {});
+  w.add_channel(s, "/a", "cdr");
+  w.add_channel(s, "/b", "cdr");
+  for (std::size_t k = 0; k < messages.size(); ++k) {
+    const auto& m = messages[k];
+    w.write_message(m.channel, m.time, m.time, m.data);
+    if (k % 45 == 44) w.write_metadata("m" + std::to_string(k), {{"k", "v"}});
+  }
+  w.close();
+  EXPECT_GE(w.stats().chunks, 7u);  // one per metadata record at least
+  expect_every_message_indexed(dir / "i.mcap", messages.size(), w.stats().chunks);
+}
+
+// The same for the Foxglove sink's file: scans of a few hundred kB written in place
+// (McapWriter::add_message), in chunks smaller than one scan and of the default size.
+TEST(FoxgloveSink, EveryMessageSitsInAnIndexedChunk) {
+  auto scenario = sim::builtin_scenario("1");
+  sim::Simulator simulator(scenario, 3);
+  std::vector<sim::SimulatedScan> scans(6);
+  for (auto& s : scans) simulator.next(s);
+  for (const std::size_t chunk_bytes : {std::size_t{100'000}, std::size_t{1} << 20}) {
+    pipeline::Pipeline pipeline(core::Config{}, core::SensorModel::vlp16());
+    TempDir dir;
+    FoxgloveSinkOptions o;
+    o.mcap.chunk_bytes = chunk_bytes;
+    o.map_every_scans = 2;
+    FoxgloveSink sink(dir / "f.mcap", o);
+    sink.write_metadata("run", {{"input", "simulated"}});
+    for (const auto& s : scans) {
+      sink.write_frame(s.scan, s.pose, pipeline.process(s.scan, s.pose), pipeline.static_map());
+    }
+    sink.finish(pipeline.static_map(), scans.back().scan.stamp_ns);
+    expect_every_message_indexed(dir / "f.mcap", sink.mcap_stats().messages,
+                                 sink.mcap_stats().chunks);
+  }
+}
+
 TEST(McapWriter, DestroyedWithoutCloseLeavesNoFile) {
   TempDir dir;
   {
@@ -146,7 +272,8 @@ TEST(McapWriter, DestroyedWithoutCloseLeavesNoFile) {
 
 // A file without chunks, index or summary, built record by record: a Header, a Schema, a
 // Channel and Messages in the data section, a Data End without CRC and an empty Footer.
-std::vector<std::uint8_t> unchunked_file(int messages) {
+// With `empty_chunk`, a Chunk record without records precedes the messages.
+std::vector<std::uint8_t> unchunked_file(int messages, bool empty_chunk = false) {
   mcap::Buffer b;
   b.raw(mcap::kMagic);
   auto r = b.begin_record(mcap::Op::kHeader);
@@ -166,6 +293,16 @@ std::vector<std::uint8_t> unchunked_file(int messages) {
   b.string("cdr");
   b.u32(0);
   b.end_record(r);
+  if (empty_chunk) {
+    r = b.begin_record(mcap::Op::kChunk);
+    b.u64(0);  // start and end time
+    b.u64(0);
+    b.u64(0);  // uncompressed size
+    b.u32(0);  // CRC
+    b.string("");
+    b.u64(0);  // records
+    b.end_record(r);
+  }
   for (int k = 0; k < messages; ++k) {
     r = b.begin_record(mcap::Op::kMessage);
     b.u16(7);
@@ -185,6 +322,15 @@ std::vector<std::uint8_t> unchunked_file(int messages) {
   b.end_record(r);
   b.raw(mcap::kMagic);
   return {b.bytes().begin(), b.bytes().end()};
+}
+
+// The specification allows a chunk without records; the reader once failed on it ("opcode runs
+// past the record's end" at byte 0 of its records).
+TEST(McapReader, AnEmptyChunkHoldsNoMessages) {
+  const auto bytes = unchunked_file(3, true);
+  McapReader r(bytes, "empty-chunk.mcap");
+  EXPECT_EQ(read_messages(r, nullptr).size(), 3u);
+  EXPECT_EQ(r.message_count(7), 3u);
 }
 
 TEST(McapReader, ReadsFilesWithoutChunksOrSummary) {
