@@ -360,6 +360,14 @@ class Schema {
            "and upward (not downward: the ground under its feet) and every point inside leaves "
            "that scan, segmented or not (a head above the cluster, an arm beside it); 0 removes "
            "only its detection's cells (m)");
+    choice("remove", m.remove,
+           {{"dynamic", RemovedObjects::kDynamic},
+            {"person", RemovedObjects::kPerson},
+            {"confirmed", RemovedObjects::kConfirmed}},
+           "tracked objects whose points leave the scans and the map: dynamic = those that moved "
+           "(the paper; people who stand all along stay), person = those and every hypothesis "
+           "flagged person, confirmed = every confirmed hypothesis, moving or not; an object "
+           "removed once is removed from its first scan on");
 
     auto& b = c.background;
     section_ = "background";

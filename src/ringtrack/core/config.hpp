@@ -126,12 +126,20 @@ struct TrackingConfig {
 };
 
 /// Dynamic-object filter and static map (paper III.E).
+/// Which tracked objects the dynamic-object filter removes from the scans and the map.
+enum class RemovedObjects {
+  kDynamic,    ///< those that moved (the paper's rule: people who stand all along stay)
+  kPerson,     ///< those, and every hypothesis flagged person (standing people too)
+  kConfirmed,  ///< every confirmed hypothesis, moving or not (posts and bushes tracked too)
+};
+
 struct MappingConfig {
   int log_delay_scans{50};      // filtered scans wait this many scans in the log before the map
   double voxel_size_m{0.1};     // static-map voxel edge (one point per voxel)
   double box_margin_m{0.1};     // boxes grow by this before points inside them are removed
   double object_margin_m{0.2};  // a measured dynamic box grows by this sideways and up, and every
                                 // point inside leaves its scan (0: only its detection's cells)
+  RemovedObjects remove{RemovedObjects::kDynamic};  // which tracked objects leave the map
 };
 
 /// Background range model of a static sensor (core::BackgroundRangeModel, docs/visibility.md):

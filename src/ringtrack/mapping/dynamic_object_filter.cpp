@@ -111,6 +111,18 @@ void DynamicObjectFilter::remove_box(std::uint64_t sequence, const core::Box3& b
   }
 }
 
+bool DynamicObjectFilter::removable(const tracking::Hypothesis& h) const {
+  switch (config_.remove) {
+    case core::RemovedObjects::kDynamic:
+      return h.ever_dynamic;
+    case core::RemovedObjects::kPerson:
+      return h.ever_dynamic || h.person;
+    case core::RemovedObjects::kConfirmed:
+      return h.ever_dynamic || h.confirmed;
+  }
+  return h.ever_dynamic;
+}
+
 void DynamicObjectFilter::remove_object_box(LoggedScan& scan, const core::Box3& box) {
   // Points of the object outside its detection: 2-4 % of a walker's points lie above its
   // cluster's top (the head) or just beside it (docs/BENCHMARK.md, issue 12).
@@ -193,7 +205,7 @@ const FilterResult& DynamicObjectFilter::process(
     ObjectHistory& object = objects_[h.id];
     object.touched = sequence;
     const bool detected = h.detection >= 0;
-    if (!h.ever_dynamic) {
+    if (!removable(h)) {
       // Remember where it stood: these points go if it turns out to be dynamic later.
       object.static_boxes.push_back({sequence, h.box});
       if (detected) {
@@ -202,9 +214,9 @@ const FilterResult& DynamicObjectFilter::process(
       }
       continue;
     }
-    if (!object.ever_dynamic) {
-      // Just turned dynamic: remove it from every scan of its static era.
-      object.ever_dynamic = true;
+    if (!object.removing) {
+      // Just turned dynamic (or removable): remove it from every scan of its static era.
+      object.removing = true;
       for (const auto& b : object.static_boxes) remove_box(b.sequence, b.box);
       object.static_boxes.clear();
       if (!object.expired_static.empty()) {

@@ -91,7 +91,7 @@ class DynamicObjectFilter {
   // History of one hypothesis, bounded by the log window (older static boxes are folded into
   // one union) and by the tracker's coasting limit (gap boxes).
   struct ObjectHistory {
-    bool ever_dynamic{false};
+    bool removing{false};  // turned removable (mapping.remove): its points leave
     std::deque<BoxAt> static_boxes;  // boxes while static, for scans still in the log
     core::Box3 expired_static;       // union of static boxes whose scans are in the map
     std::vector<BoxAt> gap;          // predicted boxes while a dynamic hypothesis is missed
@@ -101,6 +101,8 @@ class DynamicObjectFilter {
   };
 
   void remove_box(std::uint64_t sequence, const core::Box3& box);
+  // Whether the hypothesis' points leave the scans (mapping.remove).
+  [[nodiscard]] bool removable(const tracking::Hypothesis& h) const;
   // Removes the points inside a measured dynamic box grown by object_margin_m (not downward).
   void remove_object_box(LoggedScan& scan, const core::Box3& box);
   [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;

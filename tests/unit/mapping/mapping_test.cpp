@@ -310,6 +310,34 @@ TEST(DynamicObjectFilter, StandingThenWalkingIsRemovedRetroactively) {
   }
 }
 
+// mapping.remove: a person who stands all along stays in the map under the paper's rule and
+// leaves it, from the first scan on, when people or confirmed tracks are removed too; a walker
+// leaves it under every rule.
+TEST(DynamicObjectFilter, RemoveRuleDecidesWhetherAStandingPersonStays) {
+  for (const auto rule : {core::RemovedObjects::kDynamic, core::RemovedObjects::kPerson,
+                          core::RemovedObjects::kConfirmed}) {
+    core::MappingConfig mapping;
+    mapping.remove = rule;
+    mapping.log_delay_scans = 10;  // the first scans reach the map before the flag is set
+    ScriptRun run(mapping);
+    for (int k = 0; k < 60; ++k) run.step({{2.0, 3.0, 1}, {-4.0 + 0.1 * k, -3.0, 2}}, {1, 2});
+    run.filter.flush();
+    const auto& hs = run.tracker.hypotheses();
+    ASSERT_EQ(hs.size(), 2u);
+    const auto standing =
+        std::find_if(hs.begin(), hs.end(), [](const auto& h) { return !h.ever_dynamic; });
+    ASSERT_NE(standing, hs.end());
+    ASSERT_TRUE(standing->person && standing->confirmed);
+    const int kept = map_points_in_cylinder(run.filter.map(), 2.0, 3.0, kPersonRadius + 0.05);
+    if (rule == core::RemovedObjects::kDynamic) {
+      EXPECT_GT(kept, 10);
+    } else {
+      EXPECT_EQ(kept, 0) << static_cast<int>(rule);
+    }
+    EXPECT_EQ(map_points_in_cylinder(run.filter.map(), 0.0, -3.0, kPersonRadius + 0.05), 0);
+  }
+}
+
 TEST(DynamicObjectFilter, LostAndRecoveredDynamicObjectIsRemovedInTheGap) {
   ScriptRun run;
   for (int k = 0; k < 60; ++k) {
