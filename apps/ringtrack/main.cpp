@@ -1,8 +1,11 @@
 // ringtrack command-line tool: turns every error into one line on stderr and a non-zero exit.
 
 #include <CLI/CLI.hpp>
+#include <cerrno>
+#include <cstring>
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "commands.hpp"
 #include "ringtrack/core/error.hpp"
@@ -22,6 +25,15 @@ int main(int argc, char** argv) {
   ringtrack::cli::register_sensors(app);
   try {
     app.parse(argc, argv);
+    // Output that could not be written (a full disk, /dev/full) must not end in exit 0; the
+    // stream reports the failure only once flushed.
+    errno = 0;
+    std::cout.flush();
+    if (!std::cout) {
+      throw ringtrack::core::Error(std::string("cannot write to standard output") +
+                                   (errno != 0 ? std::string(" (") + std::strerror(errno) + ")"
+                                               : std::string()));
+    }
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const ringtrack::core::Error& e) {
