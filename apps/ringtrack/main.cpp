@@ -1,11 +1,8 @@
 // ringtrack command-line tool: turns every error into one line on stderr and a non-zero exit.
 
 #include <CLI/CLI.hpp>
-#include <cerrno>
-#include <cstring>
 #include <exception>
 #include <iostream>
-#include <string>
 
 #include "commands.hpp"
 #include "ringtrack/core/error.hpp"
@@ -26,14 +23,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
     // Output that could not be written (a full disk, /dev/full) must not end in exit 0; the
-    // stream reports the failure only once flushed.
-    errno = 0;
+    // stream reports the failure only once flushed. (Its cause, errno of whichever write failed
+    // first, is gone by then.)
     std::cout.flush();
-    if (!std::cout) {
-      throw ringtrack::core::Error(std::string("cannot write to standard output") +
-                                   (errno != 0 ? std::string(" (") + std::strerror(errno) + ")"
-                                               : std::string()));
-    }
+    if (!std::cout) throw ringtrack::core::Error("cannot write to standard output");
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const ringtrack::core::Error& e) {

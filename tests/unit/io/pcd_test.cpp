@@ -421,13 +421,13 @@ TEST(Pcd, RefusesADeclaredSizeNoStreamCanHoldBeforeAllocatingIt) {
   const std::uint32_t sizes[2] = {2, 4'200'000'000u};
   bytes.append(reinterpret_cast<const char*>(sizes), sizeof sizes);
   bytes.append("\x00\x00", 2);
-  const std::size_t peak_before = test::peak_rss_bytes();
+  const std::size_t peak_before = ringtrack::test::peak_rss_bytes();
   const std::string e = error_of(bytes);
   EXPECT_NE(e.find("bad.pcd: binary_compressed data declares 4200000000 uncompressed bytes, more "
                    "than 2 compressed bytes can hold (at most 88 times as many)"),
             std::string::npos)
       << e;
-  EXPECT_LT(test::peak_rss_bytes() - peak_before, 64u << 20);
+  EXPECT_LT(ringtrack::test::peak_rss_bytes() - peak_before, 64u << 20);
   // Genuine data at the limit still reads: an empty scan compresses to almost nothing.
   const core::OrganizedScan empty(16, 1800);
   const std::string compressed = encode_pcd(empty, {}, PcdEncoding::kBinaryCompressed);

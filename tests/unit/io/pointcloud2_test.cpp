@@ -309,5 +309,19 @@ TEST(PointCloud2, PointTimesThatAreNoTimeAreClearErrors) {
   EXPECT_NEAR(static_cast<double>(scan.stamp_ns), 1.78000000025e18, 1e8);
 }
 
+TEST(PointCloud2, EmptyCloudOfBillionsOfRowsIsAnEmptyScan) {
+  // Found by fuzz_ros_messages (11 s for one message): width 0 with a height of 4 billion rows
+  // holds no point, so organizing it walks no rows; the scan has no returns.
+  std::vector<std::uint8_t> bytes;
+  auto cloud = test::make_xyzirt_cloud({}, 1, 0, 1'000);
+  cloud.height = 4'000'000'000u;
+  PointCloud2Organizer organizer;
+  const auto scan = organizer.organize(parse(cloud, test::RosEncoding::kRos1, bytes), "t");
+  EXPECT_EQ(scan.rings(), 16);
+  EXPECT_EQ(scan.valid_count(), 0u);
+  EXPECT_EQ(organizer.stats().points, 0u);
+  EXPECT_EQ(organizer.stats().clouds, 1u);
+}
+
 }  // namespace
 }  // namespace ringtrack::io

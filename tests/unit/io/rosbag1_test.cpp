@@ -497,7 +497,7 @@ TEST(Rosbag1, ChunkClaimingHugeSizeCostsOnlyWhatItsDataHolds) {
     const std::uint32_t claimed = 512u << 20;
     std::memcpy(&*(s + 5), &claimed, 4);
     write_file(p, b);
-    const std::size_t peak_before = test::peak_rss_bytes();
+    const std::size_t peak_before = ringtrack::test::peak_rss_bytes();
     try {
       Rosbag1Reader reader(p);
       reader.select_topic("/s");
@@ -512,7 +512,7 @@ TEST(Rosbag1, ChunkClaimingHugeSizeCostsOnlyWhatItsDataHolds) {
           << e.what();
       EXPECT_NE(std::string(e.what()).find(" of 536870912 bytes)"), std::string::npos) << e.what();
     }
-    EXPECT_LT(test::peak_rss_bytes() - peak_before, 64u << 20) << compression;
+    EXPECT_LT(ringtrack::test::peak_rss_bytes() - peak_before, 64u << 20) << compression;
   }
 }
 
