@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <fstream>
 #include <iterator>
+#include <numbers>
 #include <span>
 #include <string>
 #include <vector>
@@ -133,7 +134,7 @@ test::TestPointCloud2 small_cloud(bool with_ring) {
   std::vector<test::TestPoint> points;
   for (int ring = 0; ring < 16; ++ring) {
     for (int c = 0; c < 8; ++c) {
-      const double azimuth = 0.3 * c, elevation = (-15.0 + 2.0 * ring) * M_PI / 180.0;
+      const double azimuth = 0.3 * c, elevation = (-15.0 + 2.0 * ring) * std::numbers::pi / 180.0;
       const double r = 5.0 + 0.1 * c;
       points.push_back({static_cast<float>(r * std::cos(elevation) * std::cos(azimuth)),
                         static_cast<float>(r * std::cos(elevation) * std::sin(azimuth)),

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -23,8 +24,8 @@ std::vector<std::uint8_t> cloud_message(std::int64_t stamp_ns) {
   std::vector<test::TestPoint> points;
   for (int ring = 0; ring < 16; ++ring) {
     for (int k = 0; k < 36; ++k) {
-      const double a = k * 10.0 * 3.14159265358979 / 180.0;
-      const double e = (-15.0 + 2.0 * ring) * 3.14159265358979 / 180.0;
+      const double a = k * 10.0 * std::numbers::pi / 180.0;
+      const double e = (-15.0 + 2.0 * ring) * std::numbers::pi / 180.0;
       points.push_back({static_cast<float>(8.0 * std::cos(e) * std::cos(a)),
                         static_cast<float>(8.0 * std::cos(e) * std::sin(a)),
                         static_cast<float>(8.0 * std::sin(e)), 20.0F,
