@@ -13,6 +13,7 @@
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
 #include "ringtrack/io/csv_writers.hpp"
+#include "ringtrack/io/mcap_writer.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/poses.hpp"
 #include "ringtrack/io/sequence.hpp"
@@ -198,6 +199,36 @@ void rosbag_seeds(const fs::path& out, const fs::path& scratch) {
   put(out / "fuzz_rosbag2", "metadata_yaml", read_bytes(folder / "metadata.yaml"));
 }
 
+// fuzz_mcap_reader (its harness: control byte 0 = the raw file, with its summary): ROS 2 MCAP
+// files of two VelodyneScan messages in each chunk compression.
+void mcap_seeds(const fs::path& out, const fs::path& scratch) {
+  const auto messages =
+      test::velodyne_scan_messages(velodyne_packets(4), 0, test::RosEncoding::kCdr, 2);
+  for (const auto [compression, name] :
+       {std::pair{io::McapCompression::kNone, "none"}, std::pair{io::McapCompression::kLz4, "lz4"},
+        std::pair{io::McapCompression::kZstd, "zstd"}}) {
+    const fs::path path = scratch / "seed.mcap";
+    io::McapWriterOptions options;
+    options.profile = "ros2";
+    options.compression = compression;
+    options.chunk_bytes = 2048;
+    options.background = false;
+    io::McapWriter writer(path, options);
+    const std::string_view definition = "std_msgs/Header header\nVelodynePacket[] packets\n";
+    const auto schema = writer.add_schema(
+        "velodyne_msgs/msg/VelodyneScan", "ros2msg",
+        std::span(reinterpret_cast<const std::uint8_t*>(definition.data()), definition.size()));
+    const auto channel = writer.add_channel(schema, "/velodyne_packets", "cdr");
+    for (const auto& m : messages) {
+      const auto t = static_cast<std::uint64_t>(m.stamp_ns);
+      writer.write_message(channel, t, t, m.data);
+    }
+    writer.close();
+    put(out / "fuzz_mcap_reader", std::string("velodyne_") + name,
+        concat({Bytes{0x00}, read_bytes(path)}));
+  }
+}
+
 void pcd_seeds(const fs::path& out) {
   core::OrganizedScan scan(8, 16);
   std::vector<std::uint32_t> labels(scan.size());
@@ -295,6 +326,7 @@ void write_all_seeds(const std::filesystem::path& out, const std::filesystem::pa
   sensor_pcap_seeds(out, scratch);
   ros_message_seeds(out);
   rosbag_seeds(out, scratch);
+  mcap_seeds(out, scratch);
   pcd_seeds(out);
   text_seeds(out, source_dir);
   fs::remove_all(scratch);

@@ -104,6 +104,10 @@ void run_convert(const ConvertOptions& o) {
                            "); --keep-partial keeps partial scans");
   }
   writer->finish();
+  // Always shown, even with --quiet: the output lacks what the input lost.
+  if (const auto warning = source->warning(); !warning.empty()) {
+    std::cerr << "ringtrack: warning: " << warning << "\n";
+  }
   if (!o.quiet) {
     if (source->live()) std::cerr << "\n";
     std::cerr << "ringtrack convert: wrote " << writer->size() << " scans to " << o.out << " ("
@@ -118,9 +122,10 @@ void register_convert(CLI::App& app) {
   CLI::App* cmd = app.add_subcommand(
       "convert",
       "Decode a recording or live sensor (Velodyne pcap/pcapng, udp://HOST:PORT, "
-      "ROS 1 .bag, ROS 2 bag) into a sequence folder of organized PCD scans");
-  cmd->add_option("input", options->input,
-                  "pcap/pcapng file, udp://HOST:PORT, ROS 1 .bag file, rosbag2 folder or .db3")
+      "ROS 1 .bag, ROS 2 bag in sqlite3 or MCAP) into a sequence folder of organized PCD scans");
+  cmd->add_option(
+         "input", options->input,
+         "pcap/pcapng file, udp://HOST:PORT, ROS 1 .bag file, rosbag2 folder, .db3 or .mcap")
       ->required();
   cmd->add_option("--out", options->out, "sequence folder to write")->required();
   cmd->add_option("--format", options->format, "auto | pcap | udp | bag (ROS 1) | rosbag2");

@@ -18,6 +18,8 @@
 #include "output_rows.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/csv_writers.hpp"
+#include "ringtrack/io/foxglove_sink.hpp"
+#include "ringtrack/io/mcap_bag_reader.hpp"
 #include "ringtrack/io/output_file.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/ply.hpp"
@@ -27,6 +29,7 @@
 #include "ringtrack/io/text.hpp"
 #include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
+#include "ringtrack/version.hpp"
 
 namespace ringtrack::cli {
 namespace {
@@ -49,6 +52,9 @@ struct RunOptions {
   std::string metadata;
   std::string poses;
   std::string poses_format{"tum"};
+  std::string mcap;
+  std::string mcap_compression{"zstd"};
+  std::uint32_t mcap_map_every{0};
   bool filtered_scans{false};
   bool no_deskew{false};
   bool quiet{false};
@@ -249,6 +255,8 @@ class RunInput {
   }
   /// Number of scans when known in advance (0 for recordings and streams).
   [[nodiscard]] std::size_t size() const { return sequence_ ? sequence_->size() : 0; }
+  /// What the source survived (e.g. a bag cut off), "" when nothing.
+  [[nodiscard]] std::string warning() const { return source_ ? source_->warning() : std::string(); }
   /// What the source counted (packets, drops, ...), empty for sequence folders.
   [[nodiscard]] std::string summary() const { return source_ ? source_->summary() : std::string(); }
   /// Whether and how the scans were motion-compensated, for the summary.
@@ -265,7 +273,8 @@ class RunInput {
 
  private:
   static bool is_rosbag2_folder(const std::string& path) {
-    return std::filesystem::exists(std::filesystem::path(path) / "metadata.yaml");
+    return std::filesystem::exists(std::filesystem::path(path) / "metadata.yaml") ||
+           io::is_mcap_bag(path);
   }
 
   std::unique_ptr<io::SequenceReader> sequence_;
@@ -278,6 +287,23 @@ class RunInput {
   std::string deskew_off_;     // why not (!deskew_)
   std::size_t scans_{0}, deskewed_{0};
 };
+
+// The MCAP sink (--mcap) with the run's metadata: what wrote it, from what, with which config.
+std::unique_ptr<io::FoxgloveSink> open_mcap(const RunOptions& o, const core::Config& config) {
+  io::FoxgloveSinkOptions options;
+  options.mcap.compression = io::parse_mcap_compression(o.mcap_compression);
+  options.mcap.library = std::string("ringtrack ") + kVersion;
+  options.map_every_scans = o.mcap_map_every;
+  auto sink = std::make_unique<io::FoxgloveSink>(o.mcap, options);
+  sink->write_metadata("ringtrack", {{"version", kVersion},
+                                     {"command", "run"},
+                                     {"input", o.input},
+                                     {"format", o.format},
+                                     {"poses", o.poses},
+                                     {"deskew", o.no_deskew ? "off" : "auto"}});
+  sink->write_metadata("config", {{"config.yaml", core::dump_config(config)}});
+  return sink;
+}
 
 void run(const RunOptions& o) {
   const core::Config config = o.config.load();
@@ -297,6 +323,8 @@ void run(const RunOptions& o) {
   // Built at the first scan: a recording's sensor model is known once it was decoded.
   std::unique_ptr<pipeline::Pipeline> pipeline;
   std::unique_ptr<FilteredScanWriter> filtered;
+  std::unique_ptr<io::FoxgloveSink> mcap;
+  if (!o.mcap.empty()) mcap = open_mcap(o, config);
   if (o.filtered_scans) filtered = std::make_unique<FilteredScanWriter>(out / "filtered");
   io::TracksCsvWriter tracks(out / "tracks.csv");
   io::TimingCsvWriter timing(out / "timing.csv");
@@ -328,6 +356,7 @@ void run(const RunOptions& o) {
     tracks.write(rows);
     timing.write(timing_row(index, scan.stamp_ns, result.times));
     total_ms.push_back(result.times.total_ms);
+    if (mcap) mcap->write_frame(scan, pose, result, pipeline->static_map());
     if (filtered) {
       filtered->hold(index, scan);
       filtered->write_released(pipeline->dynamic_filter());
@@ -336,6 +365,9 @@ void run(const RunOptions& o) {
   }
   std::signal(SIGINT, previous_handler);
   if (total_ms.empty()) throw core::InputError(o.input + ": no scans found");
+  if (const auto warning = input.warning(); !warning.empty()) {
+    std::fprintf(stderr, "ringtrack: warning: %s\n", warning.c_str());
+  }
   if (progress) std::fprintf(stderr, "\n");
   pipeline->finish();
   if (filtered) filtered->write_released(pipeline->dynamic_filter());
@@ -352,6 +384,7 @@ void run(const RunOptions& o) {
     intensity.push_back(p.intensity);
   }
   io::write_ply(out / "static_map.ply", xyz, intensity);
+  if (mcap) mcap->finish(pipeline->static_map(), scan.stamp_ns);
 
   if (const auto summary = input.summary(); !summary.empty())
     std::printf("input            %s\n", summary.c_str());
@@ -369,6 +402,12 @@ void run(const RunOptions& o) {
               percentile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
   std::printf("outputs          %s/{tracks.csv,timing.csv,static_map.ply,config.yaml%s}\n",
               o.out.c_str(), o.filtered_scans ? ",filtered/" : "");
+  if (mcap) {
+    std::printf("mcap             %s (%llu messages, %u chunks, %.1f MB)\n", o.mcap.c_str(),
+                static_cast<unsigned long long>(mcap->mcap_stats().messages),
+                mcap->mcap_stats().chunks,
+                static_cast<double>(mcap->mcap_stats().file_bytes) / 1e6);
+  }
 }
 
 }  // namespace
@@ -380,10 +419,11 @@ void register_run(CLI::App& app) {
   cmd->add_option(
          "input", o->input,
          "sequence folder or folder of organized PCD files (docs/formats.md), .pcap/.pcapng, "
-         ".bag, rosbag2 folder, or udp://HOST:PORT (docs/inputs.md)")
+         ".bag, rosbag2 folder (sqlite3 or mcap), .mcap, or udp://HOST:PORT (docs/inputs.md)")
       ->required();
-  cmd->add_option("--format", o->format,
-                  "input format: auto (from the name), pcap, udp, rosbag1, rosbag2");
+  cmd->add_option(
+      "--format", o->format,
+      "input format: auto (from the name and contents), pcap, udp, rosbag1, rosbag2 (mcap)");
   cmd->add_option("--topic", o->topic, "bag topic (default: the first supported one)");
   cmd->add_option(
       "--sensor", o->sensor,
@@ -406,6 +446,13 @@ void register_run(CLI::App& app) {
   cmd->add_flag("--no-deskew", o->no_deskew,
                 "do not motion-compensate the scans (by default they are whenever poses give the "
                 "sensor's motion, docs/inputs.md)");
+  cmd->add_option("--mcap", o->mcap,
+                  "also write an MCAP file for Foxglove: scans with labels, detections, tracks, "
+                  "poses, static map, metadata (docs/visualisation.md)");
+  cmd->add_option("--mcap-compression", o->mcap_compression, "MCAP chunk compression")
+      ->check(CLI::IsMember({"zstd", "lz4", "none"}));
+  cmd->add_option("--mcap-map-every", o->mcap_map_every,
+                  "also write the static map to the MCAP every N scans (0: only at the end)");
   cmd->add_flag("--quiet", o->quiet, "no progress on stderr");
   o->config.add_to(*cmd);
   cmd->callback([o] { run(*o); });

@@ -3,6 +3,7 @@
 #include <fstream>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/mcap_bag_reader.hpp"
 #include "ringtrack/io/rosbag1_reader.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
 
@@ -122,6 +123,7 @@ bool is_rosbag1_file(const fs::path& path) {
 }
 
 bool is_rosbag2_path(const fs::path& path) {
+  if (is_mcap_bag(path)) return true;
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
     if (fs::exists(path / "metadata.yaml", ec)) return true;
@@ -135,11 +137,12 @@ bool is_rosbag2_path(const fs::path& path) {
 
 std::unique_ptr<RosbagReader> open_rosbag(const fs::path& path) {
   if (is_rosbag1_file(path)) return std::make_unique<Rosbag1Reader>(path);
+  if (is_mcap_bag(path)) return std::make_unique<McapBagReader>(path);
   if (is_rosbag2_path(path)) return std::make_unique<Rosbag2Reader>(path);
   if (path.extension() == ".bag") return std::make_unique<Rosbag1Reader>(path);  // names the error
   throw core::InputError(path.string() +
                          ": not a ROS bag (expected a ROS 1 .bag file, a rosbag2 folder with "
-                         "metadata.yaml or a .db3 file)");
+                         "metadata.yaml, a .db3 file or an MCAP file)");
 }
 
 }  // namespace ringtrack::io

@@ -52,6 +52,8 @@ class RosbagReader {
   [[nodiscard]] virtual const std::filesystem::path& path() const = 0;
   /// The file the last message came from (a rosbag2 .db3 file; the bag itself for ROS 1).
   [[nodiscard]] virtual const std::filesystem::path& current_file() const { return path(); }
+  /// A problem the reading survived, in one line (e.g. an MCAP file cut off); "" when none.
+  [[nodiscard]] virtual std::string warning() const { return {}; }
 };
 
 /// Reads the fields of one serialized message in either serialization: ROS 1 packs fields
@@ -104,10 +106,12 @@ std::string normalize_ros_type(std::string_view type);
 
 /// True for a ROS 1 bag file (by its "#ROSBAG V" magic, whatever the extension).
 bool is_rosbag1_file(const std::filesystem::path& path);
-/// True for a rosbag2 folder (metadata.yaml or .db3 files inside) or a .db3 file.
+/// True for a rosbag2 folder (metadata.yaml or .db3 or .mcap files inside), a .db3 file or an
+/// MCAP file.
 bool is_rosbag2_path(const std::filesystem::path& path);
 
-/// Opens a ROS 1 bag file or a rosbag2 folder / .db3 file, by its contents; throws
+/// Opens a ROS 1 bag file, a rosbag2 folder (sqlite3 or mcap storage), a .db3 file or an MCAP
+/// file, by its contents; throws
 /// core::InputError when it is neither.
 std::unique_ptr<RosbagReader> open_rosbag(const std::filesystem::path& path);
 

@@ -86,6 +86,8 @@ class RosbagScanSource final : public VelodyneScanSource {
   [[nodiscard]] const core::SensorModel& model() const override;
   /// One line of counters.
   [[nodiscard]] std::string summary() const override;
+  /// The bag reader's warning (e.g. an MCAP file cut off).
+  [[nodiscard]] std::string warning() const override { return reader_->warning(); }
 
   /// The chosen topic.
   [[nodiscard]] const RosbagTopicInfo& topic() const { return topic_; }

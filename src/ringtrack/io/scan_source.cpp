@@ -4,6 +4,7 @@
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/hesai_pcap_source.hpp"
+#include "ringtrack/io/mcap_bag_reader.hpp"
 #include "ringtrack/io/ouster_pcap_source.hpp"
 #include "ringtrack/io/rosbag1_reader.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
@@ -23,11 +24,11 @@ ScanInputFormat parse_scan_input_format(const std::string& name) {
   if (name == "bag" || name == "rosbag" || name == "rosbag1" || name == "ros1") {
     return ScanInputFormat::kRosbag1;
   }
-  if (name == "rosbag2" || name == "bag2" || name == "ros2" || name == "db3") {
+  if (name == "rosbag2" || name == "bag2" || name == "ros2" || name == "db3" || name == "mcap") {
     return ScanInputFormat::kRosbag2;
   }
   throw core::ConfigError("input format '" + name +
-                          "': expected auto, pcap, udp, bag (ROS 1) or rosbag2");
+                          "': expected auto, pcap, udp, bag (ROS 1), rosbag2 or mcap");
 }
 
 ScanInputFormat guess_scan_input_format(const std::string& input) {
@@ -38,6 +39,7 @@ ScanInputFormat guess_scan_input_format(const std::string& input) {
   const std::string ext = path.extension().string();
   if (ext == ".pcap" || ext == ".pcapng" || ext == ".cap") return ScanInputFormat::kPcap;
   if (is_rosbag1_file(path) || ext == ".bag") return ScanInputFormat::kRosbag1;
+  if (is_mcap_bag(path)) return ScanInputFormat::kRosbag2;  // by its magic, whatever the name
   if (is_rosbag2_path(path)) return ScanInputFormat::kRosbag2;
   throw core::InputError(input +
                          ": cannot tell the input format (expected udp://HOST:PORT, a .pcap/"
@@ -127,6 +129,8 @@ std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
       std::unique_ptr<RosbagReader> reader;
       if (format == ScanInputFormat::kRosbag1) {
         reader = std::make_unique<Rosbag1Reader>(input);
+      } else if (is_mcap_bag(input)) {
+        reader = std::make_unique<McapBagReader>(input);
       } else {
         reader = std::make_unique<Rosbag2Reader>(input);
       }

@@ -22,7 +22,7 @@ enum class ScanInputFormat {
   kPcap,     ///< .pcap / .pcapng capture of Velodyne packets
   kUdp,      ///< live Velodyne packets: udp://HOST:PORT
   kRosbag1,  ///< ROS 1 .bag file
-  kRosbag2,  ///< rosbag2 folder or .db3 file
+  kRosbag2,  ///< rosbag2 folder (sqlite3 or mcap storage), .db3 file or MCAP file
 };
 
 /// Everything an input needs.
@@ -40,7 +40,7 @@ struct ScanSourceOptions {
 };
 
 /// Parses a format name: auto, pcap (pcapng), udp, bag (rosbag, rosbag1, ros1), rosbag2 (bag2,
-/// ros2); throws core::ConfigError.
+/// ros2, db3, mcap); throws core::ConfigError.
 ScanInputFormat parse_scan_input_format(const std::string& name);
 /// The format an input implies; throws core::InputError when it cannot tell.
 ScanInputFormat guess_scan_input_format(const std::string& input);

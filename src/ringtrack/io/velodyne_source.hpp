@@ -48,6 +48,9 @@ class VelodyneScanSource {
   [[nodiscard]] virtual std::string summary() const = 0;
   /// True for a live input (no end of its own).
   [[nodiscard]] virtual bool live() const { return false; }
+  /// A problem the input survived, in one line (e.g. a bag file cut off); "" when none. Known
+  /// once next() returned nothing.
+  [[nodiscard]] virtual std::string warning() const { return {}; }
 };
 
 /// Parses a format name: auto, pcap, rosbag2 (or bag2, ros2), udp; throws core::ConfigError.
