@@ -263,6 +263,17 @@ TEST(TrajectoryCsv, ScenarioFileDrivesScriptedActors) {
   fs::remove_all(dir);
 }
 
+TEST(ScenarioFile, AListAsKeyIsAnErrorNamingTheEntry) {
+  // Found by fuzz_scenario: a flow map whose key is a list escaped as yaml-cpp's own exception
+  // (the CLI's "internal error", exit 2) instead of a ConfigError naming the entry.
+  EXPECT_EQ(error_of([] {
+              (void)parse_scenario_yaml("boxes:\n  - {center_m: [1, 2], [-25, 20]: 3}\n", "a.yaml");
+            }),
+            "a.yaml:2: boxes[0]: expected a key name, got a list or map as key");
+  EXPECT_EQ(error_of([] { (void)parse_scenario_yaml("{a: 1}: 2\n", "b.yaml"); }),
+            "b.yaml:1: scenario: expected a key name, got a list or map as key");
+}
+
 TEST(ScenarioFile, UpperBoundsNameTheKey) {
   // Issue 16: `duration_s: 1e12` simulated until killed. Each bound is an error naming the key.
   const fs::path dir = temp_dir("bounds");
