@@ -4,13 +4,11 @@
 // (model, return selection, options), a length byte and that much calibration text, then packets,
 // each led by a byte choosing its size and whether to repair its header, block flags, azimuths
 // and return mode (so that the fuzzer reaches scan assembly, not only the rejection paths).
-#include <algorithm>
 #include <cstdint>
-#include <cstring>
 #include <string>
 #include <vector>
 
-#include "ringtrack/core/error.hpp"
+#include "fuzz_support.hpp"
 #include "ringtrack/sensors/hesai/hesai_calibration.hpp"
 #include "ringtrack/sensors/hesai/hesai_decoder.hpp"
 #include "ringtrack/sensors/hesai/hesai_format.hpp"
@@ -58,38 +56,30 @@ void repair(std::vector<std::uint8_t>& p, const HesaiFormat& f, std::uint8_t mod
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 3) return 0;
-  const std::uint8_t control = data[0];
+  fuzz::FuzzInput in(data, size);
+  const std::uint8_t control = in.byte();
   const auto formats = hesai_formats();
   const HesaiFormat& f = formats[control % formats.size()];
   const std::uint8_t modes[] = {0x37, 0x38, 0x39, 0x3B, 0x33, 0x3C};
   const std::uint8_t mode = modes[(control >> 3) % 6];
-  std::size_t at = 1;
-  const std::size_t text_n = std::min<std::size_t>(data[at++], size - at);
-  const std::string text(reinterpret_cast<const char*>(data + at), text_n);
-  at += text_n;
-  try {
-    parse_hesai_calibration(text, "fuzz.csv");
-  } catch (const core::Error&) {
-  }
+  const std::string text = in.text(in.byte());
+  fuzz::expect_errors([&] { parse_hesai_calibration(text, "fuzz.csv"); });
   HesaiDecoderOptions options;
   options.calibration = parse_hesai_calibration(calibration_text(f.channels), "fuzz.csv");
   options.return_selection = static_cast<HesaiReturnSelection>((control >> 6) % 3);
   options.keep_partial_scans = (control & 0x04) != 0;
   options.cut_azimuth_deg = (control >> 5) * 45.0;
-  try {
+  fuzz::expect_errors([&] {
     HesaiDecoder decoder(options);
     HesaiParsedPacket parsed;
     std::vector<HesaiPoint> points;
     std::vector<std::uint8_t> packet;
     std::int64_t stamp_ns = 1'700'000'000'000'000'000;
-    while (at < size) {
-      const std::uint8_t head = data[at++];
+    while (!in.done()) {
+      const std::uint8_t head = in.byte();
       const std::size_t n = (head & 0x80) != 0 ? static_cast<std::size_t>(head & 0x3F) * 23
                                                : f.packet_bytes() + ((head & 0x20) != 0 ? 4 : 0);
-      const std::size_t take = std::min(n, size - at);
-      packet.assign(n, 0);
-      if (take > 0) std::memcpy(packet.data(), data + at, take);
-      at += take;
+      in.chunk(n, packet);
       if ((head & 0x40) != 0 && n >= f.packet_bytes()) repair(packet, f, mode);
       stamp_ns += static_cast<std::int64_t>(head & 0x0F) * 400'000;
       if (const HesaiFormat* g = identify_hesai_packet(packet)) {
@@ -100,15 +90,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
       }
       decoder.add_packet(packet, stamp_ns);
-      while (auto scan = decoder.pop_scan()) {
-        if (scan->size() != static_cast<std::size_t>(scan->rings()) * scan->columns())
-          __builtin_trap();
-      }
+      fuzz::drain_decoder(decoder);
     }
     decoder.finish();
-    while (decoder.pop_scan()) {
-    }
-  } catch (const core::Error&) {
-  }
+    fuzz::drain_decoder(decoder);
+  });
   return 0;
 }

@@ -4,13 +4,12 @@
 // length byte and that much metadata text, then packets, each led by a byte choosing its size
 // (the metadata's, or a short odd one) and whether to make its columns valid with in-range
 // measurement ids (so that frame assembly is reached).
-#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <string>
 #include <vector>
 
-#include "ringtrack/core/error.hpp"
+#include "fuzz_support.hpp"
 #include "ringtrack/sensors/ouster/ouster_decoder.hpp"
 #include "ringtrack/sensors/ouster/ouster_metadata.hpp"
 
@@ -41,18 +40,14 @@ std::string metadata_text(const char* profile, int beams) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 3) return 0;
-  const std::uint8_t control = data[0];
+  fuzz::FuzzInput in(data, size);
+  const std::uint8_t control = in.byte();
   const char* profiles[] = {"LEGACY", "RNG19_RFL8_SIG16_NIR16", "RNG19_RFL8_SIG16_NIR16_DUAL",
                             "RNG15_RFL8_NIR8"};
   const int beam_choices[] = {8, 16, 32, 64};
-  std::size_t at = 1;
-  const std::size_t text_n = std::min<std::size_t>(data[at++], size - at);
-  try {
-    parse_ouster_metadata(std::string(reinterpret_cast<const char*>(data + at), text_n), "f.json");
-  } catch (const core::Error&) {
-  }
-  at += text_n;
-  try {
+  const std::string text = in.text(in.byte());
+  fuzz::expect_errors([&] { parse_ouster_metadata(text, "f.json"); });
+  fuzz::expect_errors([&] {
     const OusterMetadata meta = parse_ouster_metadata(
         metadata_text(profiles[control % 4], beam_choices[(control >> 2) % 4]), "f.json");
     OusterDecoderOptions options;
@@ -61,14 +56,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const bool legacy = meta.profile == OusterProfile::kLegacy;
     const std::size_t column = (legacy ? 20 : 12) + meta.pixels_per_column * meta.pixel_bytes();
     std::vector<std::uint8_t> packet;
-    while (at < size) {
-      const std::uint8_t head = data[at++];
+    while (!in.done()) {
+      const std::uint8_t head = in.byte();
       const std::size_t n =
           (head & 0x80) != 0 ? static_cast<std::size_t>(head & 0x3F) * 29 : meta.packet_bytes();
-      const std::size_t take = std::min(n, size - at);
-      packet.assign(n, 0);
-      if (take > 0) std::memcpy(packet.data(), data + at, take);
-      at += take;
+      in.chunk(n, packet);
       if ((head & 0x40) != 0 && n == meta.packet_bytes()) {
         for (int c = 0; c < meta.columns_per_packet; ++c) {
           std::uint8_t* block = packet.data() + (legacy ? 0 : 32) + c * column;
@@ -81,15 +73,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         }
       }
       decoder.add_packet(packet, 0);
-      while (auto scan = decoder.pop_scan()) {
-        if (scan->size() != static_cast<std::size_t>(scan->rings()) * scan->columns())
-          __builtin_trap();
-      }
+      fuzz::drain_decoder(decoder);
     }
     decoder.finish();
-    while (decoder.pop_scan()) {
-    }
-  } catch (const core::Error&) {
-  }
+    fuzz::drain_decoder(decoder);
+  });
   return 0;
 }

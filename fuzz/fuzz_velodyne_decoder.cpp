@@ -3,12 +3,10 @@
 // reports and hangs are bugs. Input: one control byte (options), then packets, each led by a
 // byte choosing its size and whether to repair its block flags and factory bytes (so that the
 // fuzzer reaches scan assembly, not only the rejection paths).
-#include <algorithm>
 #include <cstdint>
-#include <cstring>
 #include <vector>
 
-#include "ringtrack/core/error.hpp"
+#include "fuzz_support.hpp"
 #include "ringtrack/core/sensor_model.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/io/velodyne_packet.hpp"
@@ -17,7 +15,8 @@ using namespace ringtrack;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 2) return 0;
-  const std::uint8_t control = data[0];
+  fuzz::FuzzInput in(data, size);
+  const std::uint8_t control = in.byte();
   io::VelodyneDecoderOptions options;
   options.return_selection = static_cast<io::VelodyneReturnSelection>(control % 3);
   options.keep_partial_scans = (control & 0x04) != 0;
@@ -27,7 +26,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.cut_azimuth_deg = (control >> 6) * 90.0;
   const std::uint8_t product = (control & 0x10) != 0 ? 0x28 : 0x22;
   const std::uint8_t mode = static_cast<std::uint8_t>(0x37 + (control >> 6) % 3);
-  try {
+  fuzz::expect_errors([&] {
     io::VelodyneDecoder decoder(options);
     const auto model = core::SensorModel::vlp16();
     const auto layout = io::VelodyneLayout::of(model);
@@ -35,15 +34,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::vector<io::VelodynePoint> points;
     std::vector<std::uint8_t> packet;
     std::int64_t stamp_ns = 1'700'000'000'000'000'000;
-    std::size_t at = 1;
-    while (at < size) {
-      const std::uint8_t head = data[at++];
+    while (!in.done()) {
+      const std::uint8_t head = in.byte();
       const std::size_t n = (head & 0x80) != 0 ? static_cast<std::size_t>(head & 0x3F) * 23 : 1206;
-      const std::size_t take = std::min(n, size - at);
-      packet.assign(n, 0);
-      // A zero-length packet has no buffer: memcpy from or to null is undefined even for 0 bytes.
-      if (take > 0) std::memcpy(packet.data(), data + at, take);
-      at += take;
+      in.chunk(n, packet);
       if ((head & 0x40) != 0 && n == 1206) {
         for (std::size_t b = 0; b < 12; ++b) {
           packet[b * 100] = 0xFF;
@@ -63,15 +57,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         io::append_velodyne_points(parsed, model, points);
       }
       decoder.add_packet(packet, stamp_ns);
-      while (auto scan = decoder.pop_scan()) {
-        if (scan->size() != static_cast<std::size_t>(scan->rings()) * scan->columns())
-          __builtin_trap();
-      }
+      fuzz::drain_decoder(decoder);
     }
     decoder.finish();
-    while (decoder.pop_scan()) {
-    }
-  } catch (const core::Error&) {
-  }
+    fuzz::drain_decoder(decoder);
+  });
   return 0;
 }

@@ -369,6 +369,11 @@ void run(const RunOptions& o) {
   while (!g_interrupted.load() && input.next(index, scan, pose)) {
     if (!pipeline) pipeline = std::make_unique<pipeline::Pipeline>(config, input.sensor_model());
     const auto& result = pipeline->process(scan, pose);
+    if (result.skipped) {  // counted by the pipeline; the run goes on
+      std::fprintf(stderr, "ringtrack: warning: %s: scan %zu: %s\n", o.input.c_str(), index,
+                   result.skip_reason.c_str());
+      continue;
+    }
     poses.push_back(pose);
     if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
     rows.clear();
@@ -411,7 +416,12 @@ void run(const RunOptions& o) {
 
   if (const auto summary = input.summary(); !summary.empty())
     std::printf("input            %s\n", summary.c_str());
-  std::printf("scans            %zu%s\n", total_ms.size(),
+  std::printf("scans            %zu%s%s\n", total_ms.size(),
+              pipeline->skipped_scans() == 0
+                  ? ""
+                  : (" (" + std::to_string(pipeline->skipped_scans()) +
+                     " more skipped: stamps older than the scan before)")
+                        .c_str(),
               g_interrupted.load() ? " (interrupted: the outputs cover these scans only)" : "");
   std::printf("deskew           %s\n", input.deskew_summary().c_str());
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());

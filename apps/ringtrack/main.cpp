@@ -22,6 +22,11 @@ int main(int argc, char** argv) {
   ringtrack::cli::register_sensors(app);
   try {
     app.parse(argc, argv);
+    // Output that could not be written (a full disk, /dev/full) must not end in exit 0; the
+    // stream reports the failure only once flushed. (Its cause, errno of whichever write failed
+    // first, is gone by then.)
+    std::cout.flush();
+    if (!std::cout) throw ringtrack::core::Error("cannot write to standard output");
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const ringtrack::core::Error& e) {

@@ -61,6 +61,22 @@ TEST(CliBasics, OutOfRangeOverrideFailsNamingTheKey) {
   EXPECT_NE(r.err.find("segmentation.certainty_threshold"), std::string::npos) << r.err;
 }
 
+TEST(CliBasics, OutOfRangeLogDelayFailsNamingTheKey) {
+  // Issue 16: every logged scan stays in memory; the bound keeps the log below 1 GB.
+  const auto r = run_command(kCli + " dump-config --set mapping.log_delay_scans=5000");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("mapping.log_delay_scans"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("expected"), std::string::npos) << r.err;
+  EXPECT_EQ(run_command(kCli + " dump-config --set mapping.log_delay_scans=1000").exit_code, 0);
+}
+
+TEST(CliBasics, OutputThatCannotBeWrittenIsAnError) {
+  // Issue 16: `dump-config > /dev/full` exited 0. The braces redirect the tool's own output.
+  const auto r = run_command("{ " + kCli + " dump-config > /dev/full; }");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, "ringtrack: error: cannot write to standard output\n");
+}
+
 TEST(CliBasics, DemoFindsTheFivePeople) {
   const auto r = run_command(kCli + " demo --runs 1");
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -177,6 +177,14 @@ std::vector<Column> load_columns(std::span<const std::uint8_t> bytes, const PcdH
                        " compressed bytes at offset " + std::to_string(h.data_offset + 8) +
                        ", found " + std::to_string(available - 8));
       }
+      // Refused before it is allocated: a header's point count and size prefix are easy to make
+      // agree, but no LZF stream decodes to more than kLzfMaxExpansion times its own size.
+      if (static_cast<std::uint64_t>(compressed) * kLzfMaxExpansion < uncompressed) {
+        fail(name, "binary_compressed data declares " + std::to_string(uncompressed) +
+                       " uncompressed bytes, more than " + std::to_string(compressed) +
+                       " compressed bytes can hold (at most " +
+                       std::to_string(kLzfMaxExpansion) + " times as many)");
+      }
       data.decompressed.resize(uncompressed);
       try {
         lzf_decompress(bytes.subspan(h.data_offset + 8, compressed), data.decompressed);

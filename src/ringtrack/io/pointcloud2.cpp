@@ -5,6 +5,8 @@
 #include <cstring>
 #include <limits>
 #include <numbers>
+#include <optional>
+#include <sstream>
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/velodyne_packet.hpp"
@@ -38,13 +40,20 @@ const PointField* find_time_field(const PointCloud2& cloud) {
   return nullptr;
 }
 
+// Absolute point times beyond this (the years 1843 and 2096) are no recording's: rejected, as
+// they would overflow the column stamp arithmetic (found by fuzz_ros_messages).
+constexpr double kMaxAbsoluteTimeNs = 4e18;
+
 // A point's time in ns since the epoch from its time field: floating fields are seconds,
 // integer fields ns; small values are offsets from the header stamp, large ones absolute.
-std::int64_t point_time_ns(const PointField& field, double value, std::int64_t header_ns) {
+// Non-finite values give the header stamp; nullopt for an absolute time out of range.
+std::optional<std::int64_t> point_time_ns(const PointField& field, double value,
+                                          std::int64_t header_ns) {
   const bool floating = field.datatype == static_cast<std::uint8_t>(PointFieldType::kFloat32) ||
                         field.datatype == static_cast<std::uint8_t>(PointFieldType::kFloat64);
   const double ns = floating ? value * 1e9 : value;
   if (!std::isfinite(ns)) return header_ns;
+  if (std::abs(ns) > kMaxAbsoluteTimeNs) return std::nullopt;
   if (std::abs(ns) > 1e15) return static_cast<std::int64_t>(std::llround(ns));  // absolute
   return header_ns + static_cast<std::int64_t>(std::llround(ns));
 }
@@ -201,10 +210,14 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
          "' field: expected a ring field or an organized cloud (one row per ring)");
   }
 
+  // Rows holding points: none when the width is 0, whatever the height says (fuzz_ros_messages
+  // found a cloud of width 0 and 1.6 billion rows that took 11 s to walk doing nothing).
+  const std::uint32_t point_rows = cloud.width == 0 ? 0 : cloud.height;
+
   // Ring of each row (organized clouds without a ring field).
   int cloud_rings = 0;
   if (fring != nullptr) {
-    for (std::uint32_t r = 0; r < cloud.height; ++r) {
+    for (std::uint32_t r = 0; r < point_rows; ++r) {
       for (std::uint32_t c = 0; c < cloud.width; ++c) {
         const double v = cloud.value(*fring, r, c);
         if (v >= 0 && v < 1024) cloud_rings = std::max(cloud_rings, static_cast<int>(v) + 1);
@@ -260,7 +273,7 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
   const auto min_range = static_cast<float>(model.min_range_m);
   const auto max_range = static_cast<float>(model.max_range_m);
   ++stats_.clouds;
-  for (std::uint32_t row = 0; row < cloud.height; ++row) {
+  for (std::uint32_t row = 0; row < point_rows; ++row) {
     for (std::uint32_t col = 0; col < cloud.width; ++col) {
       ++stats_.points;
       const double x = cloud.value(*fx, row, col);
@@ -305,8 +318,17 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
         scan.column_azimuth_rad[c] = velodyne_to_ringtrack_azimuth_rad(velodyne_deg);
       }
       if (ftime != nullptr) {
-        first_ns[c] = std::min(
-            first_ns[c], point_time_ns(*ftime, cloud.value(*ftime, row, col), cloud.stamp_ns));
+        const double value = cloud.value(*ftime, row, col);
+        const auto t = point_time_ns(*ftime, value, cloud.stamp_ns);
+        if (!t) {
+          std::ostringstream what;
+          what << where << ": point (row " << row << ", column " << col << ") has time field '"
+               << ftime->name << "' = " << value
+               << ", not a time (expected an offset from the header stamp or a stamp within +-4e18 "
+                  "ns of the epoch)";
+          throw core::InputError(what.str());
+        }
+        first_ns[c] = std::min(first_ns[c], *t);
       }
       const std::size_t i = scan.index(ring, column);
       const auto range_f = static_cast<float>(range);

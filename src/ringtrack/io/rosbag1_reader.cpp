@@ -7,7 +7,10 @@
 #include <cstring>
 #include <limits>
 #include <optional>
+#include <span>
+#include <string>
 #include <string_view>
+#include <vector>
 
 #include "ringtrack/core/error.hpp"
 
@@ -21,6 +24,92 @@ constexpr std::string_view kMagic = "#ROSBAG V2.0\n";
 constexpr std::uint64_t kMaxChunkBytes = 512ull << 20;
 // Connection headers and record headers are small; a larger length is corruption.
 constexpr std::uint32_t kMaxHeaderBytes = 16u << 20;
+
+// Grows the output of a decompressor that filled it: doubling from 64 KiB up to the declared
+// size plus one byte (room to notice a stream longer than declared). False when it is that big.
+// Growing with what the stream really produces, instead of sizing the buffer from the chunk's
+// declared size up front, keeps a corrupt or hostile size field from costing its full claim.
+bool grow_output(std::vector<std::uint8_t>& out, std::uint32_t declared) {
+  const std::size_t limit = static_cast<std::size_t>(declared) + 1;
+  if (out.size() >= limit) return false;
+  out.resize(std::min(limit, std::max<std::size_t>(2 * out.size(), 64u << 10)));
+  return true;
+}
+
+// Decompresses a bz2 stream into `out` (resized to what it produced); returns "" or the error.
+std::string decompress_bz2(std::span<const std::uint8_t> in, std::uint32_t declared,
+                           std::vector<std::uint8_t>& out) {
+  bz_stream s{};
+  if (BZ2_bzDecompressInit(&s, 0, 0) != BZ_OK) return "cannot start the bzip2 decoder";
+  s.next_in = const_cast<char*>(reinterpret_cast<const char*>(in.data()));
+  s.avail_in = static_cast<unsigned int>(in.size());
+  out.clear();
+  std::size_t out_at = 0;
+  std::string error;
+  while (true) {
+    if (out_at == out.size() && !grow_output(out, declared)) {
+      error = "more data than declared";
+      break;
+    }
+    s.next_out = reinterpret_cast<char*>(out.data() + out_at);
+    s.avail_out = static_cast<unsigned int>(out.size() - out_at);
+    const unsigned int avail_in = s.avail_in;
+    const int rc = BZ2_bzDecompress(&s);
+    const std::size_t produced = out.size() - s.avail_out - out_at;
+    out_at += produced;
+    if (rc == BZ_STREAM_END) break;
+    if (rc != BZ_OK) {
+      error = "bzip2 error " + std::to_string(rc);
+      break;
+    }
+    // Room left for output but nothing more came: the input ran out (or the decoder is stuck).
+    if (s.avail_out != 0 && (s.avail_in == 0 || (s.avail_in == avail_in && produced == 0))) {
+      error = "the stream is cut off";
+      break;
+    }
+  }
+  BZ2_bzDecompressEnd(&s);
+  out.resize(out_at);
+  return error;
+}
+
+// Decompresses an LZ4 frame (what roslz4 writes) into `out`; returns "" or the error.
+std::string decompress_lz4(std::span<const std::uint8_t> in, std::uint32_t declared,
+                           std::vector<std::uint8_t>& out) {
+  LZ4F_dctx* ctx = nullptr;
+  if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) {
+    return "cannot create an LZ4 decompression context";
+  }
+  out.clear();
+  std::size_t in_at = 0;
+  std::size_t out_at = 0;
+  std::size_t rc = 1;
+  std::string error;
+  while (rc != 0) {
+    if (out_at == out.size() && !grow_output(out, declared)) {
+      error = "more data than declared";
+      break;
+    }
+    std::size_t in_size = in.size() - in_at;
+    std::size_t out_size = out.size() - out_at;
+    rc = LZ4F_decompress(ctx, out.data() + out_at, &out_size, in.data() + in_at, &in_size,
+                         nullptr);
+    if (LZ4F_isError(rc)) {
+      error = LZ4F_getErrorName(rc);
+      break;
+    }
+    in_at += in_size;
+    out_at += out_size;
+    // Room left for output but nothing more came: the input ran out (or the decoder is stuck).
+    if (rc != 0 && out_at < out.size() && (in_at == in.size() || (in_size == 0 && out_size == 0))) {
+      error = "the frame is cut off";
+      break;
+    }
+  }
+  LZ4F_freeDecompressionContext(ctx);
+  out.resize(out_at);
+  return error;
+}
 
 std::uint32_t le32(const std::uint8_t* p) {
   return static_cast<std::uint32_t>(p[0]) | (static_cast<std::uint32_t>(p[1]) << 8) |
@@ -211,12 +300,13 @@ Rosbag1Reader::~Rosbag1Reader() = default;
 
 void Rosbag1Reader::read_bytes(std::uint64_t offset, std::size_t n,
                                std::vector<std::uint8_t>& out) {
-  out.resize(n);
+  // Checked before resizing: a size read from the file costs nothing until the file holds it.
   if (offset > file_size_ || n > file_size_ - offset) {
     throw core::InputError(path_.string() + ": truncated: needs " + std::to_string(n) +
                            " bytes at offset " + std::to_string(offset) + ", the file has " +
                            std::to_string(file_size_));
   }
+  out.resize(n);
   if (n == 0) return;
   if (fseeko(file_.get(), static_cast<off_t>(offset), SEEK_SET) != 0 ||
       std::fread(out.data(), 1, n, file_.get()) != n) {
@@ -298,53 +388,16 @@ void Rosbag1Reader::load_chunk(const Record& record) {
                              std::to_string(size));
     }
     read_bytes(record.data_offset, record.data_bytes, chunk_);
-  } else if (compression == "bz2") {
+  } else if (compression == "bz2" || compression == "lz4") {
     read_bytes(record.data_offset, record.data_bytes, raw_);
-    chunk_.resize(size);
-    unsigned int out_bytes = size;
-    const int rc = BZ2_bzBuffToBuffDecompress(reinterpret_cast<char*>(chunk_.data()), &out_bytes,
-                                              reinterpret_cast<char*>(raw_.data()),
-                                              static_cast<unsigned int>(raw_.size()), 0, 0);
-    if (rc != BZ_OK || out_bytes != size) {
-      throw core::InputError(where + ": corrupt bz2 data (bzip2 error " + std::to_string(rc) +
-                             ", " + std::to_string(out_bytes) + " of " + std::to_string(size) +
-                             " bytes)");
-    }
-  } else if (compression == "lz4") {
-    // ROS's roslz4 writes the LZ4 frame format.
-    read_bytes(record.data_offset, record.data_bytes, raw_);
-    chunk_.resize(size);
-    LZ4F_dctx* ctx = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&ctx, LZ4F_VERSION))) {
-      throw core::Error(where + ": cannot create an LZ4 decompression context");
-    }
-    std::size_t in_at = 0;
-    std::size_t out_at = 0;
-    std::size_t rc = 1;
-    std::string error;
-    while (rc != 0) {
-      std::size_t in_size = raw_.size() - in_at;
-      std::size_t out_size = chunk_.size() - out_at;
-      rc = LZ4F_decompress(ctx, chunk_.data() + out_at, &out_size, raw_.data() + in_at, &in_size,
-                           nullptr);
-      if (LZ4F_isError(rc)) {
-        error = LZ4F_getErrorName(rc);
-        break;
-      }
-      in_at += in_size;
-      out_at += out_size;
-      if (rc != 0 && in_size == 0 && out_size == 0) {
-        error = in_at == raw_.size() ? "the frame is cut off" : "more data than declared";
-        break;
-      }
-    }
-    LZ4F_freeDecompressionContext(ctx);
-    if (!error.empty() || out_at != size) {
-      throw core::InputError(
-          where + ": corrupt lz4 data (" +
-          (error.empty() ? std::to_string(out_at) + " of " + std::to_string(size) + " bytes"
-                         : error) +
-          ")");
+    const std::string error = compression == "bz2" ? decompress_bz2(raw_, size, chunk_)
+                                                   : decompress_lz4(raw_, size, chunk_);
+    if (!error.empty() || chunk_.size() != size) {
+      throw core::InputError(where + ": corrupt " + compression + " data (" +
+                             (error.empty() ? std::to_string(chunk_.size()) + " of " +
+                                                  std::to_string(size) + " bytes"
+                                            : error) +
+                             ")");
     }
   } else {
     throw core::InputError(where + ": compression '" + compression +

@@ -144,6 +144,11 @@ SequenceMeta read_sequence_yaml(const fs::path& path) {
   bool have_columns = false;
   bool have_max_range = false;
   for (const auto& entry : root) {
+    // A list or map as key has no name (as<std::string>() would throw yaml-cpp's own exception).
+    if (!entry.first.IsScalar()) {
+      throw core::InputError(path.string() + ":" + std::to_string(entry.first.Mark().line + 1) +
+                             ": expected a key name, got a list or map as key");
+    }
     const std::string key = entry.first.as<std::string>();
     const YAML::Node& value = entry.second;
     const std::string where = at_key(path, entry.first, key);

@@ -1,7 +1,10 @@
 #include "ringtrack/pipeline/pipeline.hpp"
 
 #include <chrono>
+#include <iomanip>
 #include <numbers>
+#include <sstream>
+#include <string>
 #include <utility>
 
 #include "ringtrack/core/error.hpp"
@@ -15,7 +18,26 @@ double elapsed_ms(Clock::time_point from, Clock::time_point to) {
   return std::chrono::duration<double, std::milli>(to - from).count();
 }
 
+// Why a scan older than the previous one is skipped: both stamps and how far back it lies.
+std::string older_than_previous(std::int64_t stamp_ns, std::int64_t previous_ns) {
+  std::ostringstream text;
+  text << "stamp " << stamp_ns << " ns is " << std::fixed << std::setprecision(9)
+       << static_cast<double>(previous_ns - stamp_ns) * 1e-9
+       << " s older than the previous scan's " << previous_ns
+       << " ns (a clock step or a corrupt stamp); skipped";
+  return text.str();
+}
+
 }  // namespace
+
+const FrameResult& Pipeline::skip(const core::OrganizedScan& scan, std::string reason) {
+  ++skipped_scans_;
+  result_ = FrameResult{};
+  result_.stamp_ns = scan.stamp_ns;
+  result_.skipped = true;
+  result_.skip_reason = std::move(reason);
+  return result_;
+}
 
 Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
     : config_(config),
@@ -32,10 +54,7 @@ Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
 
 const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core::Pose& pose) {
   if (tracker_.stamp_ns() != 0 && scan.stamp_ns < tracker_.stamp_ns()) {
-    throw core::InputError("pipeline: scan stamp " + std::to_string(scan.stamp_ns) +
-                           " ns is older than the previous scan's " +
-                           std::to_string(tracker_.stamp_ns()) +
-                           " ns; scans must come in time order");
+    return skip(scan, older_than_previous(scan.stamp_ns, tracker_.stamp_ns()));
   }
   if (scan.rings() != model_.rings()) {
     throw core::InputError("pipeline: the scan at " + std::to_string(scan.stamp_ns) + " ns has " +
@@ -67,6 +86,8 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   const auto t4 = Clock::now();
 
   result_.stamp_ns = scan.stamp_ns;
+  result_.skipped = false;
+  result_.skip_reason.clear();
   result_.segment_labels = labels_;
   result_.detections = detections;
   result_.hypotheses = hypotheses;

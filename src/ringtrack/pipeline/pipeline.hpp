@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "ringtrack/core/background_range.hpp"
@@ -38,6 +39,10 @@ struct FrameResult {
   std::span<const std::uint32_t> removed_cells;      ///< cells removed as dynamic from this scan
   std::size_t retroactive_points{0};                 ///< removed from earlier scans in the log
   StageTimes times;
+  /// The scan was not processed (its stamp is older than the previous scan's: a host clock step
+  /// or a corrupt stamp); the spans are empty and skip_reason says why.
+  bool skipped{false};
+  std::string skip_reason;  ///< e.g. "stamp 1000 ns is 0.000000500 s older than the previous 1500 ns"
 };
 
 /// Runs the stages in order on each scan; one instance per sensor stream.
@@ -46,8 +51,12 @@ class Pipeline {
   /// The model is the sensor's that took the scans: the free-space tests follow its beams.
   Pipeline(const core::Config& config, core::SensorModel model);
 
-  /// Processes one scan taken at `pose` (sensor in world); scans must come in time order.
+  /// Processes one scan taken at `pose` (sensor in world). A scan older than the previous
+  /// processed one is skipped, not processed (the tracker's filters cannot run backwards): the
+  /// result says so and why, and skipped_scans() counts it; later scans continue the tracks.
   const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& pose);
+  /// Scans skipped so far because their stamp was older than the previous scan's.
+  [[nodiscard]] std::uint64_t skipped_scans() const { return skipped_scans_; }
   /// Moves the scans still held back by the dynamic-object filter into the static map.
   void finish();
 
@@ -62,6 +71,8 @@ class Pipeline {
   [[nodiscard]] const core::BackgroundRangeModel& background() const { return background_; }
 
  private:
+  /// Counts a skipped scan and makes the result say why.
+  const FrameResult& skip(const core::OrganizedScan& scan, std::string reason);
   /// Forgets the background when the sensor left its resting pose; true while it rests there.
   bool track_rest(const core::Pose& pose);
 
@@ -76,6 +87,7 @@ class Pipeline {
   std::optional<core::Pose> rest_pose_;  // where the sensor came to rest (background's pose)
   std::vector<std::uint8_t> labels_;
   FrameResult result_;
+  std::uint64_t skipped_scans_{0};
 };
 
 }  // namespace ringtrack::pipeline

@@ -35,6 +35,17 @@ void require_positive(const std::string& src, const std::string& entry, const ch
     fail(src, entry, std::string(key) + " must be > 0 (got " + std::to_string(v) + ")");
   }
 }
+// Positive and at most `max`: the upper bound keeps a typo from becoming an endless run.
+void require_bounded(const std::string& src, const std::string& entry, const char* key, double v,
+                     double max) {
+  require_positive(src, entry, key, v);
+  if (v > max) {
+    std::ostringstream text;
+    text << key << " must be at most " << max << " (got " << v << ")";
+    fail(src, entry, text.str());
+  }
+}
+
 void require_unit(const std::string& src, const std::string& entry, const char* key, double v) {
   if (!(v >= 0.0 && v <= 1.0)) {
     fail(src, entry, std::string(key) + " must be in [0, 1] (got " + std::to_string(v) + ")");
@@ -471,10 +482,10 @@ std::vector<Footprint> ground_footprints(const Scenario& s) {
 }
 
 void validate(const Scenario& s, const std::string& src) {
-  require_positive(src, "scenario", "duration_s", s.duration_s);
-  require_positive(src, "scenario", "area_m[0]", s.area_m.x());
-  require_positive(src, "scenario", "area_m[1]", s.area_m.y());
-  require_positive(src, "scenario", "world_radius_m", s.world_radius_m);
+  require_bounded(src, "scenario", "duration_s", s.duration_s, kMaxDurationS);
+  require_bounded(src, "scenario", "area_m[0]", s.area_m.x(), kMaxWorldExtentM);
+  require_bounded(src, "scenario", "area_m[1]", s.area_m.y(), kMaxWorldExtentM);
+  require_bounded(src, "scenario", "world_radius_m", s.world_radius_m, kMaxWorldExtentM);
   if (s.ground.amplitude_m < 0) fail(src, "ground", "amplitude_m must be >= 0");
   if (s.ground.amplitude_m > 0)
     require_positive(src, "ground", "wavelength_m", s.ground.wavelength_m);
@@ -487,8 +498,8 @@ void validate(const Scenario& s, const std::string& src) {
   if (!(s.sensor.range_noise_m >= 0)) fail(src, "sensor", "range_noise_m must be >= 0");
   require_unit(src, "sensor", "dropout_probability", s.sensor.dropout_probability);
   require_unit(src, "sensor", "far_dropout_probability", s.sensor.far_dropout_probability);
-  require_positive(src, "sensor", "figure8_radius_m", s.sensor.figure8_radius_m);
-  require_positive(src, "sensor", "max_speed_mps", s.sensor.max_speed_mps);
+  require_bounded(src, "sensor", "figure8_radius_m", s.sensor.figure8_radius_m, kMaxWorldExtentM);
+  require_bounded(src, "sensor", "max_speed_mps", s.sensor.max_speed_mps, kMaxSensorSpeedMps);
   if (s.sensor.tilt_gain < 0) fail(src, "sensor", "tilt_gain must be >= 0");
   if (s.sensor.motion == SensorMotion::kScripted) {
     if (s.sensor.keyframes.empty()) fail(src, "sensor", "motion scripted needs keyframes");
@@ -498,7 +509,14 @@ void validate(const Scenario& s, const std::string& src) {
       }
     }
   }
-  if (s.people < 0 || s.robots < 0 || s.drones < 0) fail(src, "actors", "counts must be >= 0");
+  for (const auto& [key, count] : {std::pair{"people", s.people}, std::pair{"robots", s.robots},
+                                   std::pair{"drones", s.drones}}) {
+    if (count < 0 || count > kMaxActorsPerKind) {
+      fail(src, "actors", std::string(key) + " must be in [0, " +
+                              std::to_string(kMaxActorsPerKind) + "] (got " +
+                              std::to_string(count) + ")");
+    }
+  }
   for (std::size_t i = 0; i < s.boxes.size(); ++i) {
     const std::string e = "boxes[" + std::to_string(i) + "]";
     for (int a = 0; a < 3; ++a) require_positive(src, e, "size_m", s.boxes[i].size_m[a]);

@@ -85,6 +85,13 @@ inline constexpr double kPersonWidthM = 0.6;
 /// Radius about the sensor's position_m (its mast; the figure-8 centre) that walkers keep out of.
 inline constexpr double kSensorKeepOutM = 0.6;
 
+/// Upper bounds validate() enforces, so that a typo (`duration_s: 1e12`) is an error naming the
+/// key instead of a simulation that never ends or exhausts memory.
+inline constexpr double kMaxDurationS = 86'400.0;     ///< one day: 864,000 scans at 10 Hz
+inline constexpr int kMaxActorsPerKind = 1000;        ///< people, robots and drones, each
+inline constexpr double kMaxWorldExtentM = 10'000.0;  ///< area sides, world and figure-8 radius
+inline constexpr double kMaxSensorSpeedMps = 100.0;   ///< figure-8 peak speed
+
 /// How the sensor moves.
 enum class SensorMotion : std::uint8_t { kStatic, kFigure8, kScripted };
 /// Sensor keyframe of a scripted sensor trajectory (roll, pitch, yaw in degrees).

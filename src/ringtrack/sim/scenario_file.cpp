@@ -101,6 +101,9 @@ class MapReader {
   // Throws on keys not consumed by the getters above.
   void finish(const std::vector<const char*>& allowed) const {
     for (const auto& kv : node_) {
+      // A list or map used as a key (`[-25, 20]: ...`) has no name: as<std::string>() would
+      // throw yaml-cpp's own exception, which is no core::Error (found by fuzz_scenario).
+      if (!kv.first.IsScalar()) fail(kv.first, "expected a key name, got a list or map as key");
       const auto key = kv.first.as<std::string>();
       if (!seen_.count(key)) {
         std::string list;
@@ -147,16 +150,9 @@ std::string read_text(const std::filesystem::path& path) {
   return s.str();
 }
 
-}  // namespace
-
-Scenario parse_scenario_yaml(const std::string& text, const std::string& source) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(text);
-  } catch (const YAML::Exception& e) {
-    throw core::ConfigError(source + ":" + std::to_string(e.mark.line + 1) +
-                            ": invalid YAML: " + e.msg);
-  }
+// The scenario in a parsed YAML document; parse_scenario_yaml turns what yaml-cpp throws
+// itself (a conversion the checks here missed) into a ConfigError.
+Scenario scenario_from_yaml(const YAML::Node& root, const std::string& source) {
   Scenario s;
   MapReader top(root, source, "scenario");
   top.text("name", s.name);
@@ -268,6 +264,19 @@ Scenario parse_scenario_yaml(const std::string& text, const std::string& source)
               "ground", "sensor", "actors", "boxes", "cylinders", "ellipsoids", "walls"});
   if (s.name.empty()) s.name = source;
   return s;
+}
+
+}  // namespace
+
+Scenario parse_scenario_yaml(const std::string& text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(text);
+    return scenario_from_yaml(root, source);
+  } catch (const YAML::Exception& e) {
+    throw core::ConfigError(source + ":" + std::to_string(e.mark.line + 1) +
+                            ": invalid YAML: " + e.msg);
+  }
 }
 
 namespace {

@@ -52,6 +52,14 @@ TEST(Config, RejectsOutOfRangeAndMalformedValuesByName) {
   expect_config_error("segmentation:\n  min_width_m: [1]\n", "segmentation.min_width_m");
 }
 
+TEST(Config, AListOrMapAsKeyIsAConfigError) {
+  // Found while fixing fuzz_scenario's find: yaml-cpp threw its own exception (no ConfigError)
+  // for a key that is a list or a map, at the top level and inside a section.
+  expect_config_error("[segmentation]: 1\n", "line 1: expected a key name, got a list or map as key");
+  expect_config_error("segmentation:\n  {a: 1}: 2\n",
+                      "line 2: expected a key name, got a list or map as key");
+}
+
 TEST(Config, FailedLoadLeavesConfigUntouched) {
   Config c;
   EXPECT_THROW(apply_config_yaml(c, "segmentation:\n  min_width_m: 0.2\n  nope: 1\n", "x"),

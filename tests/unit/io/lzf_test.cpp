@@ -45,6 +45,22 @@ Bytes text(const std::string& s) {
   return {s.begin(), s.end()};
 }
 
+TEST(Lzf, NoStreamDecodesToMoreThanTheDeclaredMaximumExpansion) {
+  // The longest token, a 3-byte back reference of length 264 (control 0xE0, length byte 255,
+  // distance 1), is the densest: a stream of them after a 1-byte literal reaches the maximum.
+  Bytes stream{0x00, 'z'};
+  for (int k = 0; k < 100; ++k) stream.insert(stream.end(), {0xE0, 0xFF, 0x00});
+  const std::size_t size = 1 + 100 * 264;
+  EXPECT_EQ(decode(stream, size), Bytes(size, 'z'));
+  EXPECT_LE(size, stream.size() * kLzfMaxExpansion);
+  EXPECT_GT(size, (stream.size() - 2) * (kLzfMaxExpansion - 1));  // the bound is tight
+  // Our compressor approaches it on uniform data.
+  const Bytes zeros(1u << 20, 0);
+  const Bytes packed = lzf_compress(zeros);
+  EXPECT_LE(zeros.size(), packed.size() * kLzfMaxExpansion);
+  EXPECT_GT(zeros.size(), packed.size() * 80);
+}
+
 TEST(Lzf, DecodesHandMadeStream) {
   // literal run "abc" (control 2), then a 5-byte back reference 3 bytes back:
   // length field 5-2 = 3 in the top bits (0x60), distance-1 = 2 -> overlapping copy.

@@ -13,6 +13,7 @@
 #include "ringtrack/core/sensor_model.hpp"
 #include "ringtrack/io/lzf.hpp"
 #include "ringtrack/sim/simple_scene.hpp"
+#include "support/peak_memory.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -408,6 +409,29 @@ TEST(Pcd, RejectsCorruptCompressedData) {
       EXPECT_EQ(std::string(e.what()).rfind("corrupt.pcd: ", 0), 0u) << e.what();
     }
   }
+}
+
+TEST(Pcd, RefusesADeclaredSizeNoStreamCanHoldBeforeAllocatingIt) {
+  // Issue 16's memory bomb: a 200-byte file whose header (262,500 x 1,000 points of 16 bytes) and
+  // size prefix agree on 4.2 GB, followed by a 2-byte stream (at most 176 bytes decoded).
+  std::string bytes =
+      "VERSION 0.7\nFIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n"
+      "WIDTH 262500\nHEIGHT 1000\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 262500000\n"
+      "DATA binary_compressed\n";
+  const std::uint32_t sizes[2] = {2, 4'200'000'000u};
+  bytes.append(reinterpret_cast<const char*>(sizes), sizeof sizes);
+  bytes.append("\x00\x00", 2);
+  const std::size_t peak_before = ringtrack::test::peak_rss_bytes();
+  const std::string e = error_of(bytes);
+  EXPECT_NE(e.find("bad.pcd: binary_compressed data declares 4200000000 uncompressed bytes, more "
+                   "than 2 compressed bytes can hold (at most 88 times as many)"),
+            std::string::npos)
+      << e;
+  EXPECT_LT(ringtrack::test::peak_rss_bytes() - peak_before, 64u << 20);
+  // Genuine data at the limit still reads: an empty scan compresses to almost nothing.
+  const core::OrganizedScan empty(16, 1800);
+  const std::string compressed = encode_pcd(empty, {}, PcdEncoding::kBinaryCompressed);
+  EXPECT_EQ(decode_pcd(as_bytes(compressed), "empty.pcd").scan.columns(), 1800);
 }
 
 TEST(Pcd, RandomByteDamageIsAnErrorOrAValidScan) {

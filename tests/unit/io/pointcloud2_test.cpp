@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <random>
 
@@ -273,6 +274,53 @@ TEST(PointCloud2, CloudsThatCannotBeOrganizedAreClearErrors) {
   EXPECT_THROW(organizer.organize(parse(no_xyz, test::RosEncoding::kCdr, bytes), "t"),
                core::InputError);
   EXPECT_THROW(PointCloud2Organizer({"nosuch", 10.0, 0.0, "ring"}), core::ConfigError);
+}
+
+TEST(PointCloud2, PointTimesThatAreNoTimeAreClearErrors) {
+  // Found by fuzz_ros_messages: a time field of -1e12 s (-1e21 ns) became INT64_MIN, and the
+  // column stamps after it overflowed. A float32 "time" of +-1e12 s is no stamp: an error naming
+  // the point; the largest plausible absolute stamps (float64 seconds since the epoch) still read.
+  std::vector<std::uint8_t> bytes;
+  for (const float seconds : {-1e12F, 1e12F}) {
+    const auto cloud =
+        test::make_xyzirt_cloud({{1, 0, 0, 0, 0, 0}, {0, 1, 0, 0, 3, seconds}}, 1, 2, 0);
+    PointCloud2Organizer organizer;
+    try {
+      organizer.organize(parse(cloud, test::RosEncoding::kCdr, bytes), "bag (message 4)");
+      ADD_FAILURE() << "expected an error for " << seconds;
+    } catch (const core::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("bag (message 4): point (row 0, column 1) has time "
+                                           "field 'time' = "),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  // Oracle: 2026 as float64 seconds since the epoch is an absolute stamp (scan stamp = column 0's,
+  // within one revolution of the point's column), not an offset from the header stamp of 5 ns.
+  auto absolute = test::make_xyzirt_cloud({{1, 0, 0, 0, 0, 0}}, 1, 1, 5);
+  absolute.fields[5].datatype = 8;  // float64 "time" at offset 18 overlaps nothing after it
+  absolute.point_step = 26;
+  absolute.row_step = 26;
+  absolute.data.resize(26);
+  const double stamp_s = 1'780'000'000.25;
+  std::memcpy(absolute.data.data() + 18, &stamp_s, 8);
+  PointCloud2Organizer organizer;
+  const auto scan = organizer.organize(parse(absolute, test::RosEncoding::kCdr, bytes), "t");
+  EXPECT_NEAR(static_cast<double>(scan.stamp_ns), 1.78000000025e18, 1e8);
+}
+
+TEST(PointCloud2, EmptyCloudOfBillionsOfRowsIsAnEmptyScan) {
+  // Found by fuzz_ros_messages (11 s for one message): width 0 with a height of 4 billion rows
+  // holds no point, so organizing it walks no rows; the scan has no returns.
+  std::vector<std::uint8_t> bytes;
+  auto cloud = test::make_xyzirt_cloud({}, 1, 0, 1'000);
+  cloud.height = 4'000'000'000u;
+  PointCloud2Organizer organizer;
+  const auto scan = organizer.organize(parse(cloud, test::RosEncoding::kRos1, bytes), "t");
+  EXPECT_EQ(scan.rings(), 16);
+  EXPECT_EQ(scan.valid_count(), 0u);
+  EXPECT_EQ(organizer.stats().points, 0u);
+  EXPECT_EQ(organizer.stats().clouds, 1u);
 }
 
 }  // namespace

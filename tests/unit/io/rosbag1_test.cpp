@@ -3,6 +3,7 @@
 // source; corrupt and truncated bags are errors, never crashes.
 #include <gtest/gtest.h>
 
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -13,6 +14,7 @@
 #include "ringtrack/io/rosbag_source.hpp"
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
+#include "support/peak_memory.hpp"
 #include "support/rosbag_writers.hpp"
 #include "support/temp_dir.hpp"
 #include "support/velodyne_encoder.hpp"
@@ -474,6 +476,44 @@ TEST(Rosbag1, MalformedHeadersAreClearErrors) {
   b[static_cast<std::size_t>(at - b.begin()) + 12] ^= 0x55;
   expect_error(b, "corrupt bz2 data");
   EXPECT_THROW(Rosbag1Reader{dir.path() / "missing.bag"}, core::InputError);
+}
+
+TEST(Rosbag1, ChunkClaimingHugeSizeCostsOnlyWhatItsDataHolds) {
+  // Issue 16: a chunk whose size field claims 512 MiB (the largest accepted) made the reader
+  // allocate all of it for a file of kilobytes. Output now grows with what the stream produces.
+  test::TempDir dir;
+  const std::vector<test::TestBagTopic> topics{{"/s", "std_msgs/String"}};
+  const std::vector<test::TestBagMessage> msgs{
+      {0, kBaseNs, test::serialize_string(std::string(3000, 'a'), test::RosEncoding::kRos1)}};
+  for (const std::string compression : {"lz4", "bz2"}) {
+    const fs::path p = dir.path() / (compression + ".bag");
+    test::write_rosbag1(p, topics, msgs, {compression, 4096, true});
+    auto b = read_file(p);
+    const std::string field = "compression=" + compression;
+    const auto chunk = std::search(b.begin(), b.end(), field.begin(), field.end());
+    const std::string size_field = "size=";
+    const auto s = std::search(chunk, b.end(), size_field.begin(), size_field.end());
+    ASSERT_NE(s, b.end());
+    const std::uint32_t claimed = 512u << 20;
+    std::memcpy(&*(s + 5), &claimed, 4);
+    write_file(p, b);
+    const std::size_t peak_before = ringtrack::test::peak_rss_bytes();
+    try {
+      Rosbag1Reader reader(p);
+      reader.select_topic("/s");
+      RosbagMessage m;
+      while (reader.next(m)) {
+      }
+      ADD_FAILURE() << compression << ": expected an error";
+    } catch (const core::InputError& e) {
+      // The frame decodes completely: 3,000 characters and their record headers, not 512 MiB.
+      EXPECT_NE(std::string(e.what()).find(": corrupt " + compression + " data ("),
+                std::string::npos)
+          << e.what();
+      EXPECT_NE(std::string(e.what()).find(" of 536870912 bytes)"), std::string::npos) << e.what();
+    }
+    EXPECT_LT(ringtrack::test::peak_rss_bytes() - peak_before, 64u << 20) << compression;
+  }
 }
 
 TEST(Rosbag1, SameScansAsTheRos2BagOfTheSamePackets) {

@@ -258,7 +258,12 @@ TEST(Sequence, YamlIsStrict) {
   const SequenceMeta meta = read_sequence_yaml(dir / "ok.yaml");
   EXPECT_EQ(meta.columns, 1800);
   EXPECT_FALSE(meta.scans);
-  std::string e = yaml_error(good + "colour: red\n");
+  // A list as key (found while fixing fuzz_scenario's find): an InputError naming the line.
+  std::string e = yaml_error(good + "[columns]: 3\n");
+  EXPECT_NE(e.find("sequence.yaml:5: expected a key name, got a list or map as key"),
+            std::string::npos)
+      << e;
+  e = yaml_error(good + "colour: red\n");
   EXPECT_NE(e.find("sequence.yaml:5: key 'colour': unknown key"), std::string::npos) << e;
   e = yaml_error("format_version: 2\nsensor: vlp16\nscan_rate_hz: 10\ncolumns: 1800\n");
   EXPECT_NE(e.find("key 'format_version': unsupported version 2 (this ringtrack reads 1)"),

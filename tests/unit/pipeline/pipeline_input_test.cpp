@@ -6,6 +6,7 @@
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
+#include "ringtrack/sim/simple_scene.hpp"
 
 namespace ringtrack::pipeline {
 namespace {
@@ -43,6 +44,49 @@ TEST(PipelineInput, RejectsAnInconsistentSensorModel) {
   auto model = core::SensorModel::vlp16();
   model.elevation_rad.pop_back();  // tables of different sizes
   EXPECT_THROW(Pipeline(core::Config{}, model), core::Error);
+}
+
+// Issue 16: a scan whose stamp goes back (a host clock step, a corrupt bag stamp) aborted the
+// whole run. It is skipped and counted instead, and the run goes on exactly as if the scan had
+// never been there (oracle: a second pipeline that never saw it).
+TEST(PipelineInput, ScanOlderThanThePreviousIsSkippedAndCounted) {
+  const auto model = core::SensorModel::vlp16();
+  const auto people = sim::render(model, sim::SimpleScene::open_field(4)).scan;
+  const auto at = [&](std::int64_t stamp_ns) {
+    core::OrganizedScan scan = people;
+    scan.set_uniform_columns(model, stamp_ns);
+    return scan;
+  };
+  const auto pose = [](std::int64_t stamp_ns) {
+    core::Pose p;
+    p.stamp_ns = stamp_ns;
+    return p;
+  };
+  Pipeline with_step(core::Config{}, model);
+  Pipeline without(core::Config{}, model);
+  const std::int64_t second = 1'000'000'000;
+  for (const std::int64_t t : {1 * second, 2 * second, 3 * second}) {
+    EXPECT_FALSE(with_step.process(at(t), pose(t)).skipped);
+    without.process(at(t), pose(t));
+  }
+  const auto& skipped = with_step.process(at(2'500'000'000), pose(2'500'000'000));
+  EXPECT_TRUE(skipped.skipped);
+  EXPECT_EQ(skipped.skip_reason,
+            "stamp 2500000000 ns is 0.500000000 s older than the previous scan's 3000000000 ns (a "
+            "clock step or a corrupt stamp); skipped");
+  EXPECT_TRUE(skipped.hypotheses.empty());
+  EXPECT_EQ(with_step.skipped_scans(), 1u);
+  const auto& after = with_step.process(at(4 * second), pose(4 * second));
+  EXPECT_FALSE(after.skipped);
+  EXPECT_TRUE(after.skip_reason.empty());
+  const auto& oracle = without.process(at(4 * second), pose(4 * second));
+  ASSERT_EQ(after.hypotheses.size(), oracle.hypotheses.size());
+  ASSERT_GE(after.hypotheses.size(), 4u);  // the four people, tracked across the skipped scan
+  for (std::size_t k = 0; k < after.hypotheses.size(); ++k) {
+    EXPECT_EQ(after.hypotheses[k].id, oracle.hypotheses[k].id);
+    EXPECT_EQ(after.hypotheses[k].reported, oracle.hypotheses[k].reported);
+  }
+  EXPECT_EQ(without.skipped_scans(), 0u);
 }
 
 }  // namespace

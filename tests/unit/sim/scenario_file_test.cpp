@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -258,6 +260,58 @@ TEST(TrajectoryCsv, ScenarioFileDrivesScriptedActors) {
   const auto out = sim.next();  // t = 2.5-2.6 s: y = -1 + t
   EXPECT_NEAR(out.objects.at(0).body_center_m.y(), 1.55, 0.06);
   EXPECT_GT(out.objects.at(0).hit_points, 10);
+  fs::remove_all(dir);
+}
+
+TEST(ScenarioFile, AListAsKeyIsAnErrorNamingTheEntry) {
+  // Found by fuzz_scenario: a flow map whose key is a list escaped as yaml-cpp's own exception
+  // (the CLI's "internal error", exit 2) instead of a ConfigError naming the entry.
+  EXPECT_EQ(error_of([] {
+              (void)parse_scenario_yaml("boxes:\n  - {center_m: [1, 2], [-25, 20]: 3}\n", "a.yaml");
+            }),
+            "a.yaml:2: boxes[0]: expected a key name, got a list or map as key");
+  EXPECT_EQ(error_of([] { (void)parse_scenario_yaml("{a: 1}: 2\n", "b.yaml"); }),
+            "b.yaml:1: scenario: expected a key name, got a list or map as key");
+}
+
+TEST(ScenarioFile, UpperBoundsNameTheKey) {
+  // Issue 16: `duration_s: 1e12` simulated until killed. Each bound is an error naming the key.
+  const fs::path dir = temp_dir("bounds");
+  const auto error_for = [&](const std::string& yaml) {
+    write(dir / "b.yaml", yaml);
+    return error_of([&] { (void)load_scenario_file(dir / "b.yaml"); });
+  };
+  const std::string prefix = (dir / "b.yaml").string() + ": ";
+  EXPECT_EQ(error_for("duration_s: 1e12\n"),
+            prefix + "scenario: duration_s must be at most 86400 (got 1e+12)");
+  EXPECT_EQ(error_for("actors: {people: 5000}\n"),
+            prefix + "actors: people must be in [0, 1000] (got 5000)");
+  EXPECT_EQ(error_for("actors: {drones: -1}\n"),
+            prefix + "actors: drones must be in [0, 1000] (got -1)");
+  EXPECT_EQ(error_for("world_radius_m: 1e9\n"),
+            prefix + "scenario: world_radius_m must be at most 10000 (got 1e+09)");
+  EXPECT_EQ(error_for("area_m: [20000, 10]\n"),
+            prefix + "scenario: area_m[0] must be at most 10000 (got 20000)");
+  EXPECT_EQ(error_for("sensor: {motion: figure8, max_speed_mps: 300}\n"),
+            prefix + "sensor: max_speed_mps must be at most 100 (got 300)");
+  // The bounds themselves are accepted.
+  EXPECT_EQ(error_for("duration_s: 86400\nactors: {people: 1000, robots: 1000}\n"), "(no error)");
+  fs::remove_all(dir);
+}
+
+TEST(CliSimulate, EndlessDurationIsAnErrorNamingTheKey) {
+  const fs::path cli = RINGTRACK_CLI_PATH;
+  if (!fs::exists(cli)) GTEST_SKIP() << "CLI not built: " << cli;
+  const fs::path dir = temp_dir("endless");
+  const std::string cmd = cli.string() + " simulate 1 --duration 1e12 --out " +
+                          (dir / "out").string() + " 2> " + (dir / "err.txt").string();
+  const int status = std::system(cmd.c_str());
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 1) << status;
+  std::ifstream err(dir / "err.txt");
+  std::string line;
+  std::getline(err, line);
+  EXPECT_NE(line.find("duration_s must be at most 86400 (got 1e+12)"), std::string::npos) << line;
+  EXPECT_FALSE(fs::exists(dir / "out" / "sequence.yaml"));
   fs::remove_all(dir);
 }
 
