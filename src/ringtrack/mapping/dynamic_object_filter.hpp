@@ -50,7 +50,7 @@ struct LoggedScan {
 /// What the filter did in one call.
 struct FilterResult {
   std::uint64_t sequence{0};                 ///< of the scan just processed
-  std::vector<std::uint32_t> removed_cells;  ///< its cells removed (dynamic detections)
+  std::vector<std::uint32_t> removed_cells;  ///< its cells removed (dynamic objects)
   std::size_t retroactive_points{0};         ///< points removed from earlier scans still in the log
   /// Points of this scan removed for lying in a dynamic object's grown box, not in its cells.
   std::size_t object_box_points{0};
