@@ -20,11 +20,14 @@
 #include <thread>
 #include <vector>
 
-#include "benchmark_run.hpp"
 #include "commands.hpp"
 #include "output_rows.hpp"
 #include "plots.hpp"
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/experiment/aggregate.hpp"
+#include "ringtrack/experiment/benchmark_case.hpp"
+#include "ringtrack/experiment/plan.hpp"
+#include "ringtrack/experiment/results_json.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/output_file.hpp"
 #include "ringtrack/sim/scenario.hpp"
@@ -35,6 +38,10 @@ namespace ringtrack::cli {
 namespace {
 
 namespace fs = std::filesystem;
+using experiment::Aggregate;
+using experiment::BenchmarkCase;
+using experiment::StageSeries;
+using experiment::StageStats;
 
 struct BenchmarkOptions {
   std::vector<int> scenarios{1, 2, 3, 4, 5, 6, 7};
@@ -82,22 +89,6 @@ std::string case_label(const BenchmarkCase& c) {
          (c.moving ? " (moving)" : " (static)");
 }
 
-// Scenario files of the validation set, sorted by name.
-std::vector<std::string> validation_files() {
-  const fs::path dir = fs::path(RINGTRACK_CONFIG_DIR) / "validation";
-  std::vector<std::string> out;
-  std::error_code ec;
-  for (const auto& e : fs::directory_iterator(dir, ec)) {
-    if (e.is_regular_file() && e.path().extension() == ".yaml") out.push_back(e.path().string());
-  }
-  if (ec || out.empty()) {
-    throw core::InputError(dir.string() + ": no validation scenarios (*.yaml) found" +
-                           (ec ? ": " + ec.message() : std::string()));
-  }
-  std::sort(out.begin(), out.end());
-  return out;
-}
-
 std::string machine_description() {
   std::string model = "unknown CPU";
   std::ifstream cpuinfo("/proc/cpuinfo");
@@ -120,103 +111,6 @@ std::string utc_now() {
   std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M UTC", &tm);
   return buf;
 }
-
-nlohmann::ordered_json number_or_null(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
-}
-
-// Same keys as `ringtrack eval --json` so the two can be compared.
-nlohmann::ordered_json metrics_json(const eval::MotSummary& s) {
-  return {{"mota", number_or_null(s.mota())},
-          {"motp", number_or_null(s.motp())},
-          {"motp_horizontal", number_or_null(s.horizontal_motp())},
-          {"mean_vertical_error", number_or_null(s.mean_vertical_error())},
-          {"true_positives", s.true_positives()},
-          {"matches", s.matches},
-          {"false_positives", s.false_positives},
-          {"misses", s.misses},
-          {"id_switches", s.switches},
-          {"fragmentations", s.fragmentations},
-          {"recall", number_or_null(s.recall())},
-          {"precision", number_or_null(s.precision())},
-          {"mostly_tracked", s.mostly_tracked},
-          {"partially_tracked", s.partially_tracked},
-          {"mostly_lost", s.mostly_lost},
-          {"mostly_tracked_ratio", number_or_null(s.mostly_tracked_ratio())},
-          {"partially_tracked_ratio", number_or_null(s.partially_tracked_ratio())},
-          {"mostly_lost_ratio", number_or_null(s.mostly_lost_ratio())},
-          {"idf1", number_or_null(s.idf1())},
-          {"gt_objects", s.gt_objects},
-          {"hypotheses", s.hypotheses},
-          {"gt_presences", s.gt_presences},
-          {"hypothesis_presences", s.hypothesis_presences},
-          {"frames", s.frames}};
-}
-
-nlohmann::ordered_json map_json(const eval::MapCounts& m) {
-  return {{"preservation_rate", number_or_null(m.preservation_rate())},
-          {"rejection_rate", number_or_null(m.rejection_rate())},
-          {"static_points", m.static_points},
-          {"static_kept", m.static_kept},
-          {"dynamic_points", m.dynamic_points},
-          {"dynamic_removed", m.dynamic_removed}};
-}
-
-struct StageStats {
-  double median, p95, max;
-};
-StageStats stats_of(const std::vector<double>& v) {
-  return {quantile(v, 0.5), quantile(v, 0.95),
-          v.empty() ? 0.0 : *std::max_element(v.begin(), v.end())};
-}
-
-const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>> kStages = {
-    {"segmentation", &StageSeries::segmentation},
-    {"detection", &StageSeries::detection},
-    {"tracking", &StageSeries::tracking},
-    {"mapping", &StageSeries::mapping},
-    {"total", &StageSeries::total}};
-
-nlohmann::ordered_json times_json(const StageSeries& s) {
-  nlohmann::ordered_json j;
-  for (const auto& [name, member] : kStages) {
-    const StageStats st = stats_of(s.*member);
-    j[name] = {{"median_ms", st.median}, {"p95_ms", st.p95}, {"max_ms", st.max}};
-  }
-  return j;
-}
-
-// A group of cases summed (never averaged): metrics, map counts and pooled times.
-struct Aggregate {
-  std::string label;
-  eval::MotSummary mot;
-  eval::MotSummary moving_only;  // ground truth restricted to objects that move
-  std::int64_t moving_objects = 0;
-  std::int64_t never_moving_objects = 0;
-  eval::MotSummary person;  // person mode (with --person-figures)
-  std::int64_t person_hypotheses = 0;
-  eval::MapCounts map;
-  StageSeries times;
-  std::int64_t scans = 0;
-  int cases = 0;
-  void add(const BenchmarkCase& c) {
-    mot += c.tracking.summary;
-    if (c.person) {
-      person += c.person->summary;
-      person_hypotheses += c.person->hypotheses_evaluated;
-    }
-    moving_only += c.tracking.moving_only;
-    moving_objects += c.tracking.moving_objects;
-    never_moving_objects += c.tracking.still_objects;
-    map += c.map;
-    for (const auto& [name, member] : kStages) {
-      (times.*member)
-          .insert((times.*member).end(), (c.times.*member).begin(), (c.times.*member).end());
-    }
-    scans += c.scans;
-    ++cases;
-  }
-};
 
 // The tracking cells both accuracy tables share: MOTA to GT.
 std::string mot_cells(const eval::MotSummary& s) {
@@ -365,8 +259,8 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
   md << "| --- | --- | --- | --- | --- | --- |\n";
   const auto time_row = [&](const std::string& label, const StageSeries& s) {
     md << "| " << label;
-    for (const auto& [name, member] : kStages) {
-      const StageStats st = stats_of(s.*member);
+    for (const auto& [name, member] : experiment::stage_members()) {
+      const StageStats st = experiment::stats_of(s.*member);
       md << " | " << fixed(st.median, 2) << " / " << fixed(st.p95, 2) << " / " << fixed(st.max, 2);
     }
     md << " |\n";
@@ -391,38 +285,18 @@ bool plot_stage_times(const fs::path& timing_csv, const fs::path& png) {
 void run_benchmark(const BenchmarkOptions& o) {
   const core::Config config = o.config.load();
   core::validate_config(config);
-  if (o.duration_s && !(*o.duration_s > 0))
-    throw core::ConfigError("benchmark: --duration must be > 0");
-  const bool with_static = o.sensors != "moving";
-  const bool with_moving = o.sensors != "static";
-  std::vector<std::string> files = o.scenario_files;
+  experiment::PlanOptions plan;
+  plan.builtins = o.scenarios;
+  plan.builtins_given = o.scenarios_given;
+  plan.scenario_files = o.scenario_files;
   if (o.validation) {
-    for (const std::string& f : validation_files()) files.push_back(f);
+    const fs::path dir = fs::path(RINGTRACK_CONFIG_DIR) / "validation";
+    for (const std::string& f : experiment::scenario_files_in(dir)) plan.scenario_files.push_back(f);
   }
-  // Built-ins run by default, and beside scenario files only when --scenarios names them.
-  const bool with_builtins = files.empty() || o.scenarios_given;
-  struct Run {
-    sim::Scenario scenario;
-    bool validation;
-  };
-  std::vector<Run> scenarios;
-  const auto add = [&](sim::Scenario s, bool validation) {
-    if (o.duration_s) s.duration_s = *o.duration_s;
-    // A file's own sensor motion is replaced exactly as for the built-ins: static, then the
-    // figure 8 about its position (a scripted sensor path is kept as the moving run).
-    const bool scripted = s.sensor.motion == sim::SensorMotion::kScripted;
-    sim::Scenario still = s;
-    still.sensor.motion = sim::SensorMotion::kStatic;
-    if (with_static) scenarios.push_back({still, validation});
-    if (with_moving)
-      scenarios.push_back({scripted ? s : sim::with_moving_sensor(still), validation});
-  };
-  if (with_builtins) {
-    for (const int number : o.scenarios) add(sim::builtin_scenario(std::to_string(number)), false);
-  }
-  for (const std::string& f : files) add(sim::load_scenario_file(f), true);
-  // Every run is checked before the first one starts (a moving variant may hit a solid).
-  for (const Run& r : scenarios) sim::validate(r.scenario, r.scenario.name);
+  plan.duration_s = o.duration_s;
+  plan.with_static = o.sensors != "moving";
+  plan.with_moving = o.sensors != "static";
+  const std::vector<experiment::PlannedRun> runs = experiment::plan_runs(plan);
 
   const fs::path out = o.out;
   std::error_code ec;
@@ -431,7 +305,7 @@ void run_benchmark(const BenchmarkOptions& o) {
   const std::string config_text = core::dump_config(config);
   io::write_file(out / "config.yaml", config_text);
 
-  BenchmarkCaseOptions case_options;
+  experiment::BenchmarkCaseOptions case_options;
   case_options.seed = o.seed;
   case_options.deskew = !o.no_deskew;
   case_options.evaluation.moving_radius_m = o.moving_radius_m;
@@ -441,9 +315,9 @@ void run_benchmark(const BenchmarkOptions& o) {
   io::OutputFile timing(out / "timing.csv");
   timing.write(
       "case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n");
-  for (const Run& run : scenarios) {
+  for (const experiment::PlannedRun& run : runs) {
     const sim::Scenario& s = run.scenario;
-    const bool moving = s.sensor.motion != sim::SensorMotion::kStatic;
+    const bool moving = run.moving();
     if (!o.quiet && !o.json) {
       std::cerr << "scenario " << (run.validation ? std::string("V") : std::to_string(s.number))
                 << " " << s.name << (moving ? " (moving)" : " (static)") << " ..." << std::flush;
@@ -453,8 +327,7 @@ void run_benchmark(const BenchmarkOptions& o) {
     std::unique_ptr<io::ObjectsCsvWriter> objects_csv;
     case_options.on_scan = {};
     if (o.save_tracks) {
-      const std::string stem = (run.validation ? "V-" + s.name : std::to_string(s.number)) +
-                               (moving ? "-moving" : "-static");
+      const std::string stem = run.stem();
       tracks_csv = std::make_unique<io::TracksCsvWriter>(out / ("tracks-" + stem + ".csv"));
       objects_csv = std::make_unique<io::ObjectsCsvWriter>(out / ("objects-" + stem + ".csv"));
       case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
@@ -467,7 +340,7 @@ void run_benchmark(const BenchmarkOptions& o) {
         }
       };
     }
-    BenchmarkCase c = run_benchmark_case(s, config, case_options);
+    BenchmarkCase c = experiment::run_benchmark_case(s, config, case_options);
     c.validation = run.validation;
     if (tracks_csv) {
       tracks_csv->close();
@@ -496,29 +369,7 @@ void run_benchmark(const BenchmarkOptions& o) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   // Built-ins and validation scenarios are summed apart: "all ..." are the built-ins only.
-  std::vector<Aggregate> groups;
-  Aggregate all_static, all_moving, overall, val_static, val_moving, val_overall;
-  all_static.label = "all static";
-  all_moving.label = "all moving";
-  overall.label = "overall";
-  val_static.label = "validation static";
-  val_moving.label = "validation moving";
-  val_overall.label = "validation overall";
-  for (const BenchmarkCase& c : cases) {
-    if (c.validation) {
-      (c.moving ? val_moving : val_static).add(c);
-      val_overall.add(c);
-    } else {
-      (c.moving ? all_moving : all_static).add(c);
-      overall.add(c);
-    }
-  }
-  if (all_static.cases > 0) groups.push_back(all_static);
-  if (all_moving.cases > 0) groups.push_back(all_moving);
-  if (all_static.cases > 0 && all_moving.cases > 0) groups.push_back(overall);
-  if (val_static.cases > 0) groups.push_back(val_static);
-  if (val_moving.cases > 0) groups.push_back(val_moving);
-  if (val_static.cases > 0 && val_moving.cases > 0) groups.push_back(val_overall);
+  const std::vector<Aggregate> groups = experiment::group_cases(cases);
 
   const bool plotted = !o.no_plot && plot_stage_times(out / "timing.csv", out / "stage_times.png");
   io::write_file(out / "report.md",
@@ -535,41 +386,9 @@ void run_benchmark(const BenchmarkOptions& o) {
   j["moving_radius_m"] = case_options.evaluation.moving_radius_m;
   j["wall_s"] = wall_s;
   j["cases"] = nlohmann::ordered_json::array();
-  for (const BenchmarkCase& c : cases) {
-    j["cases"].push_back({{"scenario", c.scenario},
-                          {"name", c.name},
-                          {"validation", c.validation},
-                          {"sensor", c.moving ? "moving" : "static"},
-                          {"scans", c.scans},
-                          {"hypotheses_total", c.tracking.hypotheses_total},
-                          {"hypotheses_evaluated", c.tracking.hypotheses_evaluated},
-                          {"metrics", metrics_json(c.tracking.summary)},
-                          {"moving_only",
-                           {{"moving_objects", c.tracking.moving_objects},
-                            {"never_moving_objects", c.tracking.still_objects},
-                            {"metrics", metrics_json(c.tracking.moving_only)}}},
-                          {"map", map_json(c.map)},
-                          {"times", times_json(c.times)},
-                          {"simulate_s", c.simulate_s},
-                          {"pipeline_s", c.pipeline_s}});
-    if (c.person) {
-      j["cases"].back()["person_mode"] = {{"hypotheses_evaluated", c.person->hypotheses_evaluated},
-                                          {"metrics", metrics_json(c.person->summary)}};
-    }
-  }
+  for (const BenchmarkCase& c : cases) j["cases"].push_back(experiment::case_json(c));
   for (const Aggregate& g : groups) {
-    j["groups"][g.label] = {{"scans", g.scans},
-                            {"metrics", metrics_json(g.mot)},
-                            {"moving_only",
-                             {{"moving_objects", g.moving_objects},
-                              {"never_moving_objects", g.never_moving_objects},
-                              {"metrics", metrics_json(g.moving_only)}}},
-                            {"map", map_json(g.map)},
-                            {"times", times_json(g.times)}};
-    if (o.person_figures) {
-      j["groups"][g.label]["person_mode"] = {{"hypotheses_evaluated", g.person_hypotheses},
-                                             {"metrics", metrics_json(g.person)}};
-    }
+    j["groups"][g.label] = experiment::group_json(g, o.person_figures);
   }
   j["paper"] = nlohmann::ordered_json::array();
   for (const PaperRow& p : kPaper) {

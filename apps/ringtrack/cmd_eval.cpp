@@ -17,6 +17,7 @@
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/eval/map_metrics.hpp"
 #include "ringtrack/eval/tracking_eval.hpp"
+#include "ringtrack/experiment/results_json.hpp"
 #include "ringtrack/io/mot_tables.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/ply.hpp"
@@ -215,44 +216,6 @@ eval::TrackingEvalResult evaluate_motchallenge(const fs::path& gt_path, const fs
   result.hypotheses_total = result.summary.hypotheses;
   result.hypotheses_evaluated = result.summary.hypotheses;
   return result;
-}
-
-nlohmann::ordered_json number_or_null(double v) {
-  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
-}
-
-nlohmann::ordered_json metrics_json(const eval::MotSummary& s) {
-  return {
-      {"mota", number_or_null(s.mota())},
-      {"motp", number_or_null(s.motp())},
-      {"motp_horizontal", number_or_null(s.horizontal_motp())},
-      {"mean_vertical_error", number_or_null(s.mean_vertical_error())},
-      {"true_positives", s.true_positives()},
-      {"matches", s.matches},
-      {"false_positives", s.false_positives},
-      {"misses", s.misses},
-      {"id_switches", s.switches},
-      {"fragmentations", s.fragmentations},
-      {"recall", number_or_null(s.recall())},
-      {"precision", number_or_null(s.precision())},
-      {"mostly_tracked", s.mostly_tracked},
-      {"partially_tracked", s.partially_tracked},
-      {"mostly_lost", s.mostly_lost},
-      {"mostly_tracked_ratio", number_or_null(s.mostly_tracked_ratio())},
-      {"partially_tracked_ratio", number_or_null(s.partially_tracked_ratio())},
-      {"mostly_lost_ratio", number_or_null(s.mostly_lost_ratio())},
-      {"idf1", number_or_null(s.idf1())},
-      {"idp", number_or_null(s.idp())},
-      {"idr", number_or_null(s.idr())},
-      {"id_true_positives", s.id_true_positives},
-      {"id_false_positives", s.id_false_positives},
-      {"id_false_negatives", s.id_false_negatives},
-      {"gt_objects", s.gt_objects},
-      {"hypotheses", s.hypotheses},
-      {"gt_presences", s.gt_presences},
-      {"hypothesis_presences", s.hypothesis_presences},
-      {"frames", s.frames},
-  };
 }
 
 std::string fixed(double v, int decimals) {
@@ -477,16 +440,16 @@ void run_eval(const EvalOptions& o) {
       j["hypotheses_total"] = s.result.hypotheses_total;
       j["hypotheses_evaluated"] = s.result.hypotheses_evaluated;
     }
-    j["metrics"] = metrics_json(s.result.summary);
+    j["metrics"] = experiment::metrics_json(s.result.summary);
     if (!mot) {
       j["moving_only"] = {{"moving_objects", s.result.moving_objects},
                           {"never_moving_objects", s.result.still_objects},
-                          {"metrics", metrics_json(s.result.moving_only)}};
+                          {"metrics", experiment::metrics_json(s.result.moving_only)}};
     }
     if (s.map) j["map"] = map_json(*s.map);
     out["sequences"].push_back(std::move(j));
   }
-  out["overall"] = metrics_json(overall);
+  out["overall"] = experiment::metrics_json(overall);
   if (!mot) {
     std::int64_t moving = 0;
     std::int64_t still = 0;
@@ -496,7 +459,7 @@ void run_eval(const EvalOptions& o) {
     }
     out["overall_moving_only"] = {{"moving_objects", moving},
                                   {"never_moving_objects", still},
-                                  {"metrics", metrics_json(overall_moving)}};
+                                  {"metrics", experiment::metrics_json(overall_moving)}};
   }
   if (!o.filtered.empty()) out["overall_map"] = map_json(overall_map);
   std::cout << out.dump(2) << "\n";

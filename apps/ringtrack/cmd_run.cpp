@@ -19,6 +19,7 @@
 #include "output_rows.hpp"
 #include "plots.hpp"
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/eval/statistics.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/foxglove_sink.hpp"
 #include "ringtrack/io/mcap_bag_reader.hpp"
@@ -73,13 +74,6 @@ io::TimingRow timing_row(std::uint64_t scan, std::int64_t stamp_ns, const pipeli
            {"tracking", t.tracking_ms},
            {"mapping", t.mapping_ms}},
           t.total_ms};
-}
-
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  const auto k = static_cast<std::size_t>(q * static_cast<double>(values.size() - 1) + 0.5);
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(k), values.end());
-  return values[k];
 }
 
 // One status line on stderr: scans done, rate and, when the total is known, the time left.
@@ -426,8 +420,8 @@ void run(const RunOptions& o) {
   std::printf("deskew           %s\n", input.deskew_summary().c_str());
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
   std::printf("static map       %zu voxels\n", map_voxels);
-  std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", percentile(total_ms, 0.5),
-              percentile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
+  std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", eval::quantile(total_ms, 0.5),
+              eval::quantile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
   std::printf(
       "outputs          %s/{tracks.csv,timing.csv,static_map.ply,poses.txt,config.yaml%s%s%s}\n",
       o.out.c_str(), raw_map ? ",raw_map.ply" : "", plotted ? ",maps.png" : "",

@@ -1,7 +1,8 @@
 #pragma once
-// `ringtrack benchmark`'s engine: simulate a built-in scenario in memory, run the pipeline on it,
-// evaluate tracks (the paper's protocol) and the dynamic-object filter (map metrics), and time
-// each stage. No files are read or written here.
+/// The benchmark's engine: run the pipeline on a simulated scenario (live or recorded), evaluate
+/// the tracks (the paper's protocol) and the dynamic-object filter (map metrics), and time each
+/// stage. No files are read or written here; `ringtrack benchmark`, `ringtrack tune` and the
+/// Python package share it.
 
 #include <cstdint>
 #include <functional>
@@ -12,20 +13,31 @@
 #include "ringtrack/core/config.hpp"
 #include "ringtrack/eval/map_metrics.hpp"
 #include "ringtrack/eval/tracking_eval.hpp"
+#include "ringtrack/experiment/recorded_scenario.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 #include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/simulator.hpp"
 
-namespace ringtrack::cli {
+namespace ringtrack::experiment {
 
 /// Per-scan wall times of each pipeline stage (ms), in scan order.
 struct StageSeries {
   std::vector<double> segmentation, detection, tracking, mapping, total;
 };
 
+/// Median, 95th percentile and maximum of a series (ms).
+struct StageStats {
+  double median{0}, p95{0}, max{0};
+};
+/// Order statistics of one stage's series; zeros for an empty series.
+StageStats stats_of(const std::vector<double>& series);
+
+/// The stages of StageSeries with their names, in pipeline order, "total" last.
+const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>>& stage_members();
+
 /// How one scenario run is done.
 struct BenchmarkCaseOptions {
-  std::uint64_t seed{1};
+  std::uint64_t seed{1};                 ///< simulator seed (live runs; a recording has its own)
   bool deskew{true};                     ///< motion-compensate moving-sensor scans (exact poses)
   eval::TrackingEvalOptions evaluation;  ///< paper mode, 0.5 m, class person
   /// Also evaluate the same tracks in person mode (person-flagged hypotheses, standing people
@@ -40,14 +52,14 @@ struct BenchmarkCaseOptions {
 struct BenchmarkCase {
   int scenario{0};
   std::string name;        ///< e.g. "empty-field"
-  bool moving{false};      ///< sensor on the figure 8
+  bool moving{false};      ///< the sensor moves (figure 8 or scripted)
   bool validation{false};  ///< a validation scenario (config/validation/), reported apart
   std::int64_t scans{0};
   eval::TrackingEvalResult tracking;
   std::optional<eval::TrackingEvalResult> person;  ///< person mode, with person_figures
   eval::MapCounts map;
   StageSeries times;
-  double simulate_s{0};  ///< wall time in the simulator
+  double simulate_s{0};  ///< wall time producing scans (simulation or expanding a recording)
   double pipeline_s{0};  ///< wall time in the pipeline (process + finish)
 };
 
@@ -58,7 +70,9 @@ struct BenchmarkCase {
 BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Config& config,
                                  const BenchmarkCaseOptions& options);
 
-/// Value at quantile q (0..1) by nearest rank on a copy; 0 for an empty series.
-double quantile(std::vector<double> values, double q);
+/// The same on a recorded scenario (its own seed and deskew setting; options.seed and
+/// options.deskew are not used): identical results to the live run with that seed.
+BenchmarkCase run_benchmark_case(const RecordedScenario& recorded, const core::Config& config,
+                                 const BenchmarkCaseOptions& options);
 
-}  // namespace ringtrack::cli
+}  // namespace ringtrack::experiment

@@ -1,0 +1,173 @@
+#include "ringtrack/experiment/benchmark_case.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <deque>
+#include <map>
+#include <set>
+
+#include "ringtrack/eval/statistics.hpp"
+#include "ringtrack/pipeline/deskew.hpp"
+
+namespace ringtrack::experiment {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds(Clock::time_point from, Clock::time_point to) {
+  return std::chrono::duration<double>(to - from).count();
+}
+
+// Point counts of released scans, by object id (0 = background), until the run ends and the
+// objects that ever moved are known.
+struct PointTally {
+  std::int64_t points = 0;
+  std::int64_t removed = 0;
+};
+
+// Fills scan k and the pose to give the pipeline.
+using ScanFeed = std::function<void(std::int64_t k, sim::SimulatedScan&, core::Pose&)>;
+
+// Ground truth, tracks and map tallies gathered over one run.
+class CaseRecorder {
+ public:
+  void add_truth(std::int64_t k, const sim::SimulatedScan& scan) {
+    for (const sim::ObjectTruth& o : scan.objects) {
+      if (o.moving) ever_moving_.insert(o.id);
+      ground_truth_.push_back({k, static_cast<std::int64_t>(o.id),
+                               std::string(sim::class_name(o.object_class)), o.hit_points,
+                               o.centroid_m.cast<double>(), o.body_center_m.cast<double>()});
+    }
+    pending_labels_.push_back(scan.labels);
+  }
+
+  void add_result(std::int64_t k, const pipeline::FrameResult& result, StageSeries& times) {
+    for (const tracking::Hypothesis& h : result.hypotheses) {
+      if (!h.reported) continue;
+      tracks_.push_back({k, static_cast<std::int64_t>(h.id), h.reported_position, h.dynamic,
+                         h.ever_dynamic, h.person});
+    }
+    times.segmentation.push_back(result.times.segmentation_ms);
+    times.detection.push_back(result.times.detection_ms);
+    times.tracking.push_back(result.times.tracking_ms);
+    times.mapping.push_back(result.times.mapping_ms);
+    times.total.push_back(result.times.total_ms);
+  }
+
+  // Tallies the points of the scans the filter released (its decisions are final).
+  void count_released(const pipeline::Pipeline& pipeline) {
+    for (const mapping::LoggedScan& logged : pipeline.dynamic_filter().released()) {
+      const std::vector<std::uint32_t>& labels = pending_labels_.front();
+      for (std::size_t p = 0; p < logged.cells.size(); ++p) {
+        PointTally& t = tally_[labels[logged.cells[p]]];
+        ++t.points;
+        t.removed += logged.removed[p] ? 1 : 0;
+      }
+      pending_labels_.pop_front();
+    }
+  }
+
+  void evaluate(const BenchmarkCaseOptions& options, BenchmarkCase& out) const {
+    for (const auto& [id, t] : tally_) {
+      const bool dynamic = id != 0 && ever_moving_.count(id) != 0;
+      if (dynamic) {
+        out.map.dynamic_points += t.points;
+        out.map.dynamic_removed += t.removed;
+      } else {
+        out.map.static_points += t.points;
+        out.map.static_kept += t.points - t.removed;
+      }
+    }
+    out.tracking = eval::evaluate_tracks(ground_truth_, tracks_, options.evaluation);
+    if (options.person_figures) {
+      eval::TrackingEvalOptions person = options.evaluation;
+      person.hypotheses = eval::HypothesisSelection::kPerson;
+      out.person = eval::evaluate_tracks(ground_truth_, tracks_, person);
+    }
+  }
+
+ private:
+  std::vector<eval::GroundTruthObject> ground_truth_;
+  std::vector<eval::TrackObservation> tracks_;
+  std::set<std::int64_t> ever_moving_;
+  std::map<std::int64_t, PointTally> tally_;
+  std::deque<std::vector<std::uint32_t>> pending_labels_;  // of the scans in the filter's log
+};
+
+BenchmarkCase run_case(const sim::Scenario& scenario, const core::SensorModel& model,
+                       std::int64_t scans, const ScanFeed& feed, const core::Config& config,
+                       const BenchmarkCaseOptions& options) {
+  BenchmarkCase out;
+  out.scenario = scenario.number;
+  out.name = scenario.name;
+  out.moving = scenario.sensor.motion != sim::SensorMotion::kStatic;
+  out.scans = scans;
+  pipeline::Pipeline pipeline(config, model);
+  CaseRecorder recorder;
+  sim::SimulatedScan scan;
+  core::Pose pose;
+  for (std::int64_t k = 0; k < scans; ++k) {
+    const auto t0 = Clock::now();
+    feed(k, scan, pose);
+    const auto t1 = Clock::now();
+    recorder.add_truth(k, scan);
+    const auto t2 = Clock::now();
+    const auto& result = pipeline.process(scan.scan, pose);
+    const auto t3 = Clock::now();
+    if (options.on_scan) options.on_scan(scan, result);
+    recorder.add_result(k, result, out.times);
+    recorder.count_released(pipeline);
+    out.simulate_s += seconds(t0, t1);
+    out.pipeline_s += seconds(t2, t3);
+  }
+  const auto t4 = Clock::now();
+  pipeline.finish();
+  out.pipeline_s += seconds(t4, Clock::now());
+  recorder.count_released(pipeline);
+  recorder.evaluate(options, out);
+  return out;
+}
+
+}  // namespace
+
+StageStats stats_of(const std::vector<double>& series) {
+  if (series.empty()) return {};
+  return {eval::quantile(series, 0.5), eval::quantile(series, 0.95),
+          *std::max_element(series.begin(), series.end())};
+}
+
+const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>>& stage_members() {
+  static const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>> kStages = {
+      {"segmentation", &StageSeries::segmentation},
+      {"detection", &StageSeries::detection},
+      {"tracking", &StageSeries::tracking},
+      {"mapping", &StageSeries::mapping},
+      {"total", &StageSeries::total}};
+  return kStages;
+}
+
+BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Config& config,
+                                 const BenchmarkCaseOptions& options) {
+  sim::Simulator simulator(scenario, options.seed);
+  const bool deskew = scenario.sensor.motion != sim::SensorMotion::kStatic && options.deskew;
+  const ScanFeed feed = [&](std::int64_t k, sim::SimulatedScan& scan, core::Pose& pose) {
+    simulator.next(scan);
+    pose = scan.pose;
+    if (deskew) {
+      const std::int64_t next = simulator.scan_stamp_ns(k + 1);
+      pose = pipeline::deskew_scan(scan.scan, scan.pose, simulator.sensor_pose_at(next));
+    }
+  };
+  return run_case(scenario, simulator.model(), simulator.scan_count(), feed, config, options);
+}
+
+BenchmarkCase run_benchmark_case(const RecordedScenario& recorded, const core::Config& config,
+                                 const BenchmarkCaseOptions& options) {
+  const ScanFeed feed = [&](std::int64_t k, sim::SimulatedScan& scan, core::Pose& pose) {
+    recorded.expand(static_cast<std::size_t>(k), scan, pose);
+  };
+  return run_case(recorded.scenario(), recorded.model(),
+                  static_cast<std::int64_t>(recorded.size()), feed, config, options);
+}
+
+}  // namespace ringtrack::experiment

@@ -1,0 +1,103 @@
+#include "ringtrack/experiment/results_json.hpp"
+
+#include <cmath>
+
+namespace ringtrack::experiment {
+
+nlohmann::ordered_json number_or_null(double v) {
+  return std::isfinite(v) ? nlohmann::ordered_json(v) : nlohmann::ordered_json(nullptr);
+}
+
+nlohmann::ordered_json metrics_json(const eval::MotSummary& s) {
+  return {
+      {"mota", number_or_null(s.mota())},
+      {"motp", number_or_null(s.motp())},
+      {"motp_horizontal", number_or_null(s.horizontal_motp())},
+      {"mean_vertical_error", number_or_null(s.mean_vertical_error())},
+      {"true_positives", s.true_positives()},
+      {"matches", s.matches},
+      {"false_positives", s.false_positives},
+      {"misses", s.misses},
+      {"id_switches", s.switches},
+      {"fragmentations", s.fragmentations},
+      {"recall", number_or_null(s.recall())},
+      {"precision", number_or_null(s.precision())},
+      {"mostly_tracked", s.mostly_tracked},
+      {"partially_tracked", s.partially_tracked},
+      {"mostly_lost", s.mostly_lost},
+      {"mostly_tracked_ratio", number_or_null(s.mostly_tracked_ratio())},
+      {"partially_tracked_ratio", number_or_null(s.partially_tracked_ratio())},
+      {"mostly_lost_ratio", number_or_null(s.mostly_lost_ratio())},
+      {"idf1", number_or_null(s.idf1())},
+      {"idp", number_or_null(s.idp())},
+      {"idr", number_or_null(s.idr())},
+      {"id_true_positives", s.id_true_positives},
+      {"id_false_positives", s.id_false_positives},
+      {"id_false_negatives", s.id_false_negatives},
+      {"gt_objects", s.gt_objects},
+      {"hypotheses", s.hypotheses},
+      {"gt_presences", s.gt_presences},
+      {"hypothesis_presences", s.hypothesis_presences},
+      {"frames", s.frames},
+  };
+}
+
+nlohmann::ordered_json map_json(const eval::MapCounts& m) {
+  return {{"preservation_rate", number_or_null(m.preservation_rate())},
+          {"rejection_rate", number_or_null(m.rejection_rate())},
+          {"static_points", m.static_points},
+          {"static_kept", m.static_kept},
+          {"dynamic_points", m.dynamic_points},
+          {"dynamic_removed", m.dynamic_removed}};
+}
+
+nlohmann::ordered_json times_json(const StageSeries& s) {
+  nlohmann::ordered_json j;
+  for (const auto& [name, member] : stage_members()) {
+    const StageStats st = stats_of(s.*member);
+    j[name] = {{"median_ms", st.median}, {"p95_ms", st.p95}, {"max_ms", st.max}};
+  }
+  return j;
+}
+
+nlohmann::ordered_json case_json(const BenchmarkCase& c) {
+  nlohmann::ordered_json j = {{"scenario", c.scenario},
+                              {"name", c.name},
+                              {"validation", c.validation},
+                              {"sensor", c.moving ? "moving" : "static"},
+                              {"scans", c.scans},
+                              {"hypotheses_total", c.tracking.hypotheses_total},
+                              {"hypotheses_evaluated", c.tracking.hypotheses_evaluated},
+                              {"metrics", metrics_json(c.tracking.summary)},
+                              {"moving_only",
+                               {{"moving_objects", c.tracking.moving_objects},
+                                {"never_moving_objects", c.tracking.still_objects},
+                                {"metrics", metrics_json(c.tracking.moving_only)}}},
+                              {"map", map_json(c.map)},
+                              {"times", times_json(c.times)},
+                              {"simulate_s", c.simulate_s},
+                              {"pipeline_s", c.pipeline_s}};
+  if (c.person) {
+    j["person_mode"] = {{"hypotheses_evaluated", c.person->hypotheses_evaluated},
+                        {"metrics", metrics_json(c.person->summary)}};
+  }
+  return j;
+}
+
+nlohmann::ordered_json group_json(const Aggregate& g, bool person_figures) {
+  nlohmann::ordered_json j = {{"scans", g.scans},
+                              {"metrics", metrics_json(g.mot)},
+                              {"moving_only",
+                               {{"moving_objects", g.moving_objects},
+                                {"never_moving_objects", g.never_moving_objects},
+                                {"metrics", metrics_json(g.moving_only)}}},
+                              {"map", map_json(g.map)},
+                              {"times", times_json(g.times)}};
+  if (person_figures) {
+    j["person_mode"] = {{"hypotheses_evaluated", g.person_hypotheses},
+                        {"metrics", metrics_json(g.person)}};
+  }
+  return j;
+}
+
+}  // namespace ringtrack::experiment

@@ -1,0 +1,179 @@
+// The library's benchmark engine: a recorded scenario replays exactly what the simulator
+// produced, runs on it give the live runs' results, and cases group as the report sums them.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/experiment/aggregate.hpp"
+#include "ringtrack/experiment/benchmark_case.hpp"
+#include "ringtrack/experiment/plan.hpp"
+#include "ringtrack/experiment/recorded_scenario.hpp"
+#include "ringtrack/experiment/results_json.hpp"
+
+namespace ringtrack::experiment {
+namespace {
+
+// Bitwise equality, so that NaN cells compare equal to NaN cells.
+bool same_floats(const std::vector<float>& a, const std::vector<float>& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(float)) == 0;
+}
+
+sim::Scenario short_scenario(const char* number, double seconds, bool moving) {
+  sim::Scenario s = sim::builtin_scenario(number);
+  s.duration_s = seconds;
+  if (moving) s = sim::with_moving_sensor(s);
+  return s;
+}
+
+void expect_same_scan(const sim::SimulatedScan& a, const sim::SimulatedScan& b) {
+  EXPECT_TRUE(same_floats(a.scan.ranges(), b.scan.ranges()));
+  EXPECT_TRUE(same_floats(a.scan.xs(), b.scan.xs()));
+  EXPECT_TRUE(same_floats(a.scan.ys(), b.scan.ys()));
+  EXPECT_TRUE(same_floats(a.scan.zs(), b.scan.zs()));
+  EXPECT_TRUE(same_floats(a.scan.intensities(), b.scan.intensities()));
+  EXPECT_EQ(a.scan.statuses(), b.scan.statuses());
+  EXPECT_EQ(a.scan.column_stamp_ns, b.scan.column_stamp_ns);
+  EXPECT_EQ(a.scan.column_azimuth_rad, b.scan.column_azimuth_rad);
+  EXPECT_EQ(a.scan.stamp_ns, b.scan.stamp_ns);
+  EXPECT_EQ(a.labels, b.labels);
+  ASSERT_EQ(a.objects.size(), b.objects.size());
+  for (std::size_t i = 0; i < a.objects.size(); ++i) {
+    EXPECT_EQ(a.objects[i].id, b.objects[i].id);
+    EXPECT_EQ(a.objects[i].hit_points, b.objects[i].hit_points);
+    EXPECT_EQ(a.objects[i].moving, b.objects[i].moving);
+  }
+}
+
+TEST(RecordedScenario, ExpandsToTheSimulatorsScansBitForBit) {
+  for (const bool moving : {false, true}) {
+    const sim::Scenario s = short_scenario("2", 1.0, moving);
+    const RecordedScenario recorded(s, 7, /*deskew=*/false);
+    sim::Simulator simulator(s, 7);
+    ASSERT_EQ(recorded.size(), static_cast<std::size_t>(simulator.scan_count()));
+    EXPECT_EQ(recorded.moving(), moving);
+    sim::SimulatedScan live, replay;
+    core::Pose pose;
+    for (std::size_t k = 0; k < recorded.size(); ++k) {
+      simulator.next(live);
+      recorded.expand(k, replay, pose);
+      expect_same_scan(live, replay);
+      EXPECT_EQ(pose.translation, live.pose.translation);
+      EXPECT_EQ(pose.rotation.coeffs(), live.pose.rotation.coeffs());
+    }
+    // Only cells with a return are kept: well below the 25 bytes per cell of a full scan.
+    const std::size_t full = recorded.size() * replay.scan.size() * 25;
+    EXPECT_LT(recorded.memory_bytes(), full / 2);
+  }
+}
+
+TEST(RecordedScenario, OutOfRangeCellsKeepTheirStatus) {
+  sim::Scenario s = short_scenario("1", 0.2, false);
+  const RecordedScenario recorded(s, 3);
+  sim::Simulator simulator(s, 3);
+  sim::SimulatedScan live, replay;
+  core::Pose pose;
+  simulator.next(live);
+  recorded.expand(0, replay, pose);
+  // The empty field's ground ends inside the range limit, so every status must match, whichever
+  // occur; at least the valid ones and the no-returns (sky) do.
+  EXPECT_EQ(live.scan.statuses(), replay.scan.statuses());
+  EXPECT_GT(live.scan.valid_count(), 0u);
+}
+
+TEST(BenchmarkCase, RecordedRunGivesTheLiveRunsResults) {
+  const core::Config config;
+  for (const bool moving : {false, true}) {
+    const sim::Scenario s = short_scenario("2", 4.0, moving);
+    BenchmarkCaseOptions options;
+    options.seed = 5;
+    const BenchmarkCase live = run_benchmark_case(s, config, options);
+    const RecordedScenario recorded(s, 5, options.deskew);
+    const BenchmarkCase replay = run_benchmark_case(recorded, config, options);
+    EXPECT_EQ(metrics_json(live.tracking.summary), metrics_json(replay.tracking.summary));
+    EXPECT_EQ(map_json(live.map), map_json(replay.map));
+    EXPECT_EQ(live.scans, replay.scans);
+    EXPECT_EQ(live.moving, moving);
+    EXPECT_GT(live.tracking.summary.gt_presences, 0);
+    // A second run on the same recording is independent of the first.
+    const BenchmarkCase again = run_benchmark_case(recorded, config, options);
+    EXPECT_EQ(metrics_json(again.tracking.summary), metrics_json(replay.tracking.summary));
+  }
+}
+
+BenchmarkCase hand_case(bool moving, bool validation, std::int64_t misses, double ms) {
+  BenchmarkCase c;
+  c.moving = moving;
+  c.validation = validation;
+  c.scans = 2;
+  c.tracking.summary.misses = misses;
+  c.tracking.summary.gt_presences = 10;
+  c.map.static_points = 100;
+  c.map.static_kept = 90;
+  c.times.total = {ms, ms};
+  c.times.segmentation = c.times.detection = c.times.tracking = c.times.mapping = {0.0, 0.0};
+  return c;
+}
+
+TEST(Aggregate, GroupsSumBuiltinsAndValidationApart) {
+  const std::vector<BenchmarkCase> cases = {hand_case(false, false, 1, 1.0),
+                                            hand_case(true, false, 2, 2.0),
+                                            hand_case(false, false, 4, 3.0),
+                                            hand_case(false, true, 8, 4.0)};
+  const std::vector<Aggregate> groups = group_cases(cases);
+  ASSERT_EQ(groups.size(), 4u);  // no validation moving -> no validation overall
+  EXPECT_EQ(groups[0].label, "all static");
+  EXPECT_EQ(groups[0].mot.misses, 5);
+  EXPECT_EQ(groups[0].cases, 2);
+  EXPECT_EQ(groups[0].map.static_points, 200);
+  EXPECT_EQ(groups[0].times.total.size(), 4u);
+  EXPECT_EQ(groups[1].label, "all moving");
+  EXPECT_EQ(groups[1].mot.misses, 2);
+  EXPECT_EQ(groups[2].label, "overall");
+  EXPECT_EQ(groups[2].mot.misses, 7);
+  EXPECT_EQ(groups[2].mot.gt_presences, 30);
+  EXPECT_EQ(groups[3].label, "validation static");
+  EXPECT_EQ(groups[3].mot.misses, 8);
+  EXPECT_EQ(stats_of(groups[2].times.total).max, 3.0);
+  EXPECT_EQ(stats_of(groups[2].times.total).median, 2.0);
+}
+
+TEST(Plan, BuiltinsRunStaticThenMoving) {
+  PlanOptions o;
+  o.builtins = {1, 3};
+  o.duration_s = 2.0;
+  const std::vector<PlannedRun> runs = plan_runs(o);
+  ASSERT_EQ(runs.size(), 4u);
+  EXPECT_EQ(runs[0].stem(), "1-static");
+  EXPECT_EQ(runs[1].stem(), "1-moving");
+  EXPECT_EQ(runs[3].stem(), "3-moving");
+  EXPECT_TRUE(runs[1].moving());
+  EXPECT_EQ(runs[2].scenario.duration_s, 2.0);
+  o.with_moving = false;
+  EXPECT_EQ(plan_runs(o).size(), 2u);
+}
+
+TEST(Plan, RejectsANonPositiveDurationAndAnEmptyFolder) {
+  PlanOptions o;
+  o.duration_s = 0.0;
+  EXPECT_THROW(plan_runs(o), core::ConfigError);
+  EXPECT_THROW(scenario_files_in("/nonexistent-ringtrack-folder"), core::InputError);
+}
+
+TEST(Plan, ValidationFilesAloneSkipTheBuiltins) {
+  PlanOptions o;
+  o.scenario_files = scenario_files_in(std::string(RINGTRACK_SOURCE_DIR) + "/config/validation");
+  ASSERT_FALSE(o.scenario_files.empty());
+  o.with_moving = false;
+  const std::vector<PlannedRun> runs = plan_runs(o);
+  ASSERT_EQ(runs.size(), o.scenario_files.size());
+  for (const PlannedRun& r : runs) {
+    EXPECT_TRUE(r.validation);
+    EXPECT_EQ(r.stem().rfind("V-", 0), 0u);
+  }
+}
+
+}  // namespace
+}  // namespace ringtrack::experiment
