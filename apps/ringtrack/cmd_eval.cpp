@@ -17,6 +17,7 @@
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/eval/map_metrics.hpp"
 #include "ringtrack/eval/tracking_eval.hpp"
+#include "ringtrack/experiment/evaluate_files.hpp"
 #include "ringtrack/experiment/results_json.hpp"
 #include "ringtrack/io/mot_tables.hpp"
 #include "ringtrack/io/pcd.hpp"
@@ -165,37 +166,14 @@ fs::path resolve_gt(const std::string& arg, bool motchallenge, std::string& name
 
 eval::TrackingEvalResult evaluate_ringtrack(const fs::path& gt_path, const fs::path& tracks_path,
                                             const EvalOptions& o) {
-  const std::vector<io::ObjectRow> objects = io::read_objects_csv(gt_path);
-  io::TracksCsvColumns columns;
-  const std::vector<io::TrackRow> tracks = io::read_tracks_csv(tracks_path, &columns);
-  const eval::HypothesisSelection selection = eval::parse_selection(o.hypotheses);
-  if (selection == eval::HypothesisSelection::kPerson && !columns.person) {
-    throw core::InputError(tracks_path.string() +
-                           ": no 'person' column (written by an older ringtrack); "
-                           "--hypotheses person needs it: run the sequence again");
-  }
-  if (!o.ignore_stamps) {
-    io::check_scan_stamps(objects, gt_path.string(), tracks, tracks_path.string());
-  }
-  std::vector<eval::GroundTruthObject> gt;
-  gt.reserve(objects.size());
-  for (const io::ObjectRow& r : objects) {
-    gt.push_back({static_cast<std::int64_t>(r.scan), static_cast<std::int64_t>(r.id), r.class_name,
-                  static_cast<std::int64_t>(r.points), r.centroid, r.true_center});
-  }
-  std::vector<eval::TrackObservation> hyps;
-  hyps.reserve(tracks.size());
-  for (const io::TrackRow& r : tracks) {
-    hyps.push_back({static_cast<std::int64_t>(r.scan), static_cast<std::int64_t>(r.id), r.position,
-                    r.dynamic, r.ever_dynamic, r.person});
-  }
-  eval::TrackingEvalOptions options;
-  options.threshold_m = o.threshold_m;
-  options.target_class = o.target_class;
-  options.min_points = o.min_points;
-  options.hypotheses = selection;
-  options.moving_radius_m = o.moving_radius_m;
-  return eval::evaluate_tracks(gt, hyps, options);
+  experiment::FileEvalOptions options;
+  options.evaluation.threshold_m = o.threshold_m;
+  options.evaluation.target_class = o.target_class;
+  options.evaluation.min_points = o.min_points;
+  options.evaluation.hypotheses = eval::parse_selection(o.hypotheses);
+  options.evaluation.moving_radius_m = o.moving_radius_m;
+  options.ignore_stamps = o.ignore_stamps;
+  return experiment::evaluate_track_files(gt_path, tracks_path, options);
 }
 
 eval::TrackingEvalResult evaluate_motchallenge(const fs::path& gt_path, const fs::path& tracks_path,

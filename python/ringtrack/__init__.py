@@ -1,0 +1,58 @@
+"""ringtrack: detect and track people in spinning-LiDAR scans and build static maps.
+
+Bindings over the C++ library (docs/python.md): Config, Pipeline, the sources (recordings,
+sequence folders, live UDP), the simulator, evaluation and the benchmark engine. The tuner is
+`python3 -m ringtrack.tune` (also `ringtrack tune`).
+"""
+
+from ._ringtrack import (  # noqa: F401  (re-exported)
+    Config,
+    ConfigError,
+    Detection,
+    Frame,
+    InputError,
+    OrganizedScan,
+    Pipeline,
+    Pose,
+    RecordedScenario,
+    ReturnStatus,
+    ScanSource,
+    SensorModel,
+    Sequence,
+    Simulator,
+    Track,
+    __version__,
+    evaluate,
+    map_rates,
+    open,
+    record_runs,
+    run_case,
+    run_cases,
+    scenario_files_in,
+    scenarios,
+)
+
+
+def config_to_dict(config):
+    """The configuration as nested dicts {section: {key: value}} (values typed by YAML)."""
+    import yaml
+
+    return yaml.safe_load(config.to_yaml())
+
+
+def config_from_dict(values, base=None):
+    """A Config with values applied: nested {section: {key: v}} or flat {"section.key": v}."""
+    config = Config() if base is None else base
+    for key, value in _flatten(values):
+        config.set(key, value)
+    config.validate()
+    return config
+
+
+def _flatten(values, prefix=""):
+    for key, value in values.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            yield from _flatten(value, name + ".")
+        else:
+            yield name, value

@@ -1,0 +1,106 @@
+"""The pipeline, the simulator, sources and evaluation from Python, checked against the CLI
+(an independent front end over the same library) and against hand-made inputs."""
+
+import json
+
+import numpy as np
+import pytest
+
+import ringtrack as rt
+from conftest import SHARED_DATA, run_cli
+
+
+def test_pipeline_tracks_simulated_people():
+    sim = rt.Simulator("2", seed=1, duration_s=4)
+    pipeline = rt.Pipeline(rt.Config(), sim.model)
+    frames = [pipeline.process(s["scan"], s["pose"]) for s in sim]
+    assert len(frames) == len(sim) == 40
+    last = frames[-1]
+    assert last.segment_labels.shape == (16, sim.model.columns)
+    assert len(last.detections) > 0
+    assert any(t.reported and t.dynamic for t in last.tracks)
+    assert set(last.times_ms) == {"segmentation", "detection", "tracking", "mapping", "total"}
+    pipeline.finish()
+    assert pipeline.static_map().shape[1] == 3 and pipeline.static_map().shape[0] > 1000
+
+
+def test_pipeline_rejects_a_scan_of_another_sensor():
+    pipeline = rt.Pipeline(rt.Config(), rt.SensorModel.by_name("vlp32c"))
+    scan = rt.OrganizedScan.from_ranges(
+        rt.SensorModel.vlp16(), np.full((16, 1808), 5.0, np.float32))
+    with pytest.raises(rt.InputError, match="16 x 1808"):
+        pipeline.process(scan, rt.Pose())
+
+
+def test_stale_scan_is_skipped_with_a_reason():
+    model = rt.SensorModel.vlp16()
+    ranges = np.full((16, model.columns), 8.0, np.float32)
+    pipeline = rt.Pipeline(rt.Config(), model)
+    assert not pipeline.process(rt.OrganizedScan.from_ranges(model, ranges, stamp_ns=10**9)).skipped
+    f = pipeline.process(rt.OrganizedScan.from_ranges(model, ranges, stamp_ns=5 * 10**8))
+    assert f.skipped and "older" in f.skip_reason
+    assert pipeline.skipped_scans == 1
+
+
+def test_recorded_run_matches_the_cli_benchmark(tmp_path):
+    out = run_cli("benchmark", "--scenarios", "2", "--sensors", "both", "--duration", "3",
+                  "--out", tmp_path, "--json", "--no-plot")
+    cli = json.loads(out.stdout)
+    runs = rt.record_runs(builtins=[2], duration_s=3)
+    assert [r.stem for r in runs] == ["2-static", "2-moving"]
+    ours = rt.run_cases(runs, rt.Config())
+    for mine, theirs in zip(ours["cases"], cli["cases"]):
+        assert mine["metrics"] == theirs["metrics"]
+        assert mine["map"] == theirs["map"]
+    assert ours["groups"]["overall"]["metrics"] == cli["groups"]["overall"]["metrics"]
+    single = rt.run_case(runs[0], rt.Config())
+    assert single["metrics"] == cli["cases"][0]["metrics"]
+
+
+def test_evaluate_matches_cli_eval(simulated_sequence):
+    seq, out = simulated_sequence
+    cli = json.loads(run_cli("eval", "--gt", seq, "--tracks", out / "tracks.csv", "--json").stdout)
+    theirs = cli["sequences"][0]
+    ours = rt.evaluate(str(seq / "objects.csv"), str(out / "tracks.csv"))
+    assert ours["metrics"] == theirs["metrics"]
+    assert ours["hypotheses_evaluated"] == theirs["hypotheses_evaluated"]
+    assert 0.0 < ours["metrics"]["mota"] <= 1.0
+    person = rt.evaluate(str(seq / "objects.csv"), str(out / "tracks.csv"), hypotheses="person")
+    cli_person = json.loads(run_cli("eval", "--gt", seq, "--tracks", out / "tracks.csv",
+                                    "--hypotheses", "person", "--json").stdout)
+    assert person["metrics"] == cli_person["sequences"][0]["metrics"]
+    with pytest.raises(rt.InputError, match="missing.csv"):
+        rt.evaluate(str(seq / "missing.csv"), str(out / "tracks.csv"))
+    with pytest.raises(rt.InputError, match="sometimes"):
+        rt.evaluate(str(seq / "objects.csv"), str(out / "tracks.csv"), hypotheses="sometimes")
+
+
+def test_sequence_iterates_scans_poses_and_labels(simulated_sequence):
+    seq, _ = simulated_sequence
+    sequence = rt.Sequence(str(seq))
+    assert len(sequence) == 40 and sequence.has_poses
+    assert sequence.objects_csv.endswith("objects.csv")
+    scans = list(sequence)
+    scan, pose, labels = scans[0]
+    assert scan.rings == 16 and labels.shape == (16, scan.columns)
+    assert labels.max() > 0  # people are labelled
+    assert pose.matrix().shape == (4, 4)
+    with pytest.raises(rt.InputError):
+        rt.Sequence(str(seq / "nonexistent"))
+
+
+def test_open_a_real_vlp16_capture():
+    pcap = SHARED_DATA / "vlp16_indoor_nebula" / "vlp16_dual_4scans.pcap"
+    if not pcap.exists():
+        pytest.skip(f"{pcap} not present")
+    source = rt.open(str(pcap))
+    scans = list(source)
+    assert len(scans) >= 2
+    assert source.model.rings == 16
+    assert all(s.valid_count() > 1000 for s in scans)
+    assert "packets" in source.summary or source.summary
+
+
+def test_open_reports_a_missing_file_by_name(tmp_path):
+    with pytest.raises(rt.InputError, match="nothing.pcap"):
+        rt.open(str(tmp_path / "nothing.pcap"))
