@@ -28,5 +28,6 @@ void register_simulate(CLI::App& app);
 void register_convert(CLI::App& app);
 void register_benchmark(CLI::App& app);
 void register_sensors(CLI::App& app);
+void register_tune(CLI::App& app);
 
 }  // namespace ringtrack::cli

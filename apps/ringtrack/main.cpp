@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   ringtrack::cli::register_convert(app);
   ringtrack::cli::register_benchmark(app);
   ringtrack::cli::register_sensors(app);
+  ringtrack::cli::register_tune(app);
   try {
     app.parse(argc, argv);
     // Output that could not be written (a full disk, /dev/full) must not end in exit 0; the

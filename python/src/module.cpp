@@ -21,6 +21,9 @@ PYBIND11_MODULE(_ringtrack, m) {
   using namespace ringtrack::python;
   m.doc() = "ringtrack: detect and track people in spinning-LiDAR scans (C++ bindings)";
   m.attr("__version__") = ringtrack::kVersion;
+  // Where the shipped configuration lives (default search space, validation scenarios): the
+  // source tree's config/ (docs/python.md, "Installing").
+  m.attr("config_dir") = RINGTRACK_CONFIG_DIR;
   static py::exception<ringtrack::core::ConfigError> config_error(m, "ConfigError",
                                                                    PyExc_ValueError);
   static py::exception<ringtrack::core::InputError> input_error(m, "InputError", PyExc_ValueError);
