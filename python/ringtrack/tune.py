@@ -8,6 +8,7 @@ import argparse
 import math
 import os
 import pathlib
+import random
 import signal
 import socket
 import subprocess
@@ -120,13 +121,9 @@ def make_storage(args, out):
     url = args.storage or f"journal:{out / 'study.journal'}"
     if url.startswith("journal:"):
         path = url[len("journal:"):]
-        import warnings
-
+        tuning.ensure_dir(pathlib.Path(path).parent)
         from optuna.storages import JournalFileStorage, JournalStorage
 
-        # Optuna recommends the journal file for several processes on one machine; it marks it
-        # experimental in 3.1, which is all the warning says.
-        warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
         try:
             return JournalStorage(JournalFileStorage(path))
         except OSError as e:
@@ -135,14 +132,22 @@ def make_storage(args, out):
         raise TuneError(f"--storage: '{url}': expected postgresql://..., sqlite:///... or "
                         "journal:FILE")
     from optuna.storages import RDBStorage, RetryFailedTrialCallback
+    from sqlalchemy.exc import IntegrityError, ProgrammingError
 
-    try:
-        return RDBStorage(url, heartbeat_interval=max(1, int(args.heartbeat)),
-                          grace_period=max(2, int(args.grace)),
-                          failed_trial_callback=RetryFailedTrialCallback(max_retry=3))
-    except Exception as e:  # SQLAlchemy's errors carry the driver's message
-        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
-        raise TuneError(f"--storage: cannot reach the database at {url}: {first}") from None
+    for attempt in range(4):
+        try:
+            return RDBStorage(url, heartbeat_interval=max(1, int(args.heartbeat)),
+                              grace_period=max(2, int(args.grace)),
+                              failed_trial_callback=RetryFailedTrialCallback(max_retry=3))
+        except (IntegrityError, ProgrammingError):
+            # Workers that start together on a new database race to create Optuna's tables;
+            # the losers see a duplicate and find the tables there when they try again.
+            if attempt == 3:
+                raise
+            time.sleep(0.5 + random.random())
+        except Exception as e:  # SQLAlchemy's errors carry the driver's message
+            first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+            raise TuneError(f"--storage: cannot reach the database at {url}: {first}") from None
 
 
 def make_sampler(args, worker_index):
@@ -213,20 +218,24 @@ def optimise(args, storage, folds, space, base_yaml, objectives, worker_index):
                                              Progress(args, fold, args.trials)])
 
 
-def fail_trials_of(storage, args, folds, worker_prefix=None):
+def study_names_in(storage, args):
+    """The names of this study and its LOOCV folds that exist in the storage."""
+    import optuna
+
+    return [s.study_name for s in optuna.get_all_study_summaries(storage)
+            if s.study_name == args.study or s.study_name.startswith(args.study + "/loo-")]
+
+
+def fail_trials_of(storage, names, worker_label_=None):
     """Marks RUNNING trials FAIL (those of one dead worker, or all of an earlier session of a
     local journal) and queues their parameters again, so none stays stuck and none is lost."""
     import optuna
 
     failed = 0
-    for fold, _, _ in folds:
-        try:
-            study = optuna.load_study(study_name=study_name(args, fold), storage=storage)
-        except KeyError:
-            continue
+    for name in names:
+        study = optuna.load_study(study_name=name, storage=storage)
         for t in study.get_trials(deepcopy=False, states=(optuna.trial.TrialState.RUNNING,)):
-            owner = t.user_attrs.get("worker", "")
-            if worker_prefix is not None and owner != worker_prefix:
+            if worker_label_ is not None and t.user_attrs.get("worker", "") != worker_label_:
                 continue
             storage.set_trial_state_values(t._trial_id, optuna.trial.TrialState.FAIL)
             if t.params:
@@ -244,16 +253,25 @@ def start_workers(args, argv, count):
     return children
 
 
+def stop_workers(children):
+    """Interrupts the workers (their running trials end FAIL and are redone on resume)."""
+    for child in children:
+        if child.poll() is None:
+            child.send_signal(signal.SIGINT)
+    for child in children:
+        child.wait()
+
+
 def worker_label(pid):
     return f"{socket.gethostname()}:{pid}"
 
 
-def reap(args, storage, folds, children):
+def reap(args, storage, children):
     """Waits for the worker processes; a worker that died leaves no RUNNING trial behind."""
     for child in children:
         code = child.wait()
         if code != 0:
-            n = fail_trials_of(storage, args, folds, worker_label(child.pid))
+            n = fail_trials_of(storage, study_names_in(storage, args), worker_label(child.pid))
             log(args, f"worker {child.pid} exited with {code}; {n} running trial(s) failed and "
                 "queued again")
 
@@ -348,37 +366,52 @@ def main(argv=None):
 
 
 def run(args, argv):
+    import warnings
+
+    import optuna
+
+    # The journal file (what Optuna recommends for several processes on one machine), heartbeats
+    # and retries are marked experimental in Optuna 3.1; that is all these warnings say.
+    warnings.filterwarnings("ignore", category=optuna.exceptions.ExperimentalWarning)
     space = tuning.load_space(args.space)
     objectives = objectives_of(args)
     builtins = builtins_of(args)
     base_yaml = base_config_yaml(args)
     if not builtins and not args.scenario_files:
         raise TuneError("no runs: --scenarios is empty and no --scenario-files")
-    out = tuning.ensure_dir(args.out)
-    storage = make_storage(args, out)
+    out = pathlib.Path(args.out)
+    storage = make_storage(args, out)  # a database is reached before anything is written
+    tuning.ensure_dir(out)
     worker_index = int(os.environ.get("RINGTRACK_TUNE_WORKER_INDEX", "0"))
+    children = []
+    if not args.worker:
+        if not args.storage:  # a local journal: RUNNING trials are left from an interrupted run
+            stale = fail_trials_of(storage, study_names_in(storage, args))
+            if stale:
+                log(args, f"{stale} trial(s) of an interrupted session failed and queued again")
+        # Workers start first: each records its own runs (in memory, once per process).
+        children = start_workers(args, argv, args.workers - 1)
     start = time.monotonic()
-    runs = rt.record_runs(builtins=builtins, scenario_files=args.scenario_files,
-                          duration_s=args.duration, sensors=args.sensors, seed=args.seed)
+    try:
+        runs = rt.record_runs(builtins=builtins, scenario_files=args.scenario_files,
+                              duration_s=args.duration, sensors=args.sensors, seed=args.seed)
+    except BaseException:
+        stop_workers(children)
+        raise
     log(args, f"recorded {len(runs)} runs ({sum(len(r) for r in runs)} scans, "
         f"{sum(r.memory_bytes for r in runs) / 2**20:.0f} MiB) in {time.monotonic() - start:.1f} s")
     folds = folds_of(runs, args.loocv)
     if args.worker:
-        optimise(args, storage, folds, space, base_yaml, objectives, worker_index)
+        try:
+            optimise(args, storage, folds, space, base_yaml, objectives, worker_index)
+        except KeyboardInterrupt:
+            return EXIT_INTERRUPTED
         return 0
-    if not args.storage:  # a local journal: RUNNING trials are left from an interrupted session
-        stale = fail_trials_of(storage, args, folds)
-        if stale:
-            log(args, f"{stale} trial(s) of an interrupted session failed and queued again")
-    children = start_workers(args, argv, args.workers - 1)
     try:
         optimise(args, storage, folds, space, base_yaml, objectives, worker_index)
-        reap(args, storage, folds, children)
+        reap(args, storage, children)
     except KeyboardInterrupt:
-        for child in children:
-            child.send_signal(signal.SIGINT)
-        for child in children:
-            child.wait()
+        stop_workers(children)
         print("ringtrack tune: interrupted; run the same command again to resume the study",
               file=sys.stderr)
         return EXIT_INTERRUPTED
