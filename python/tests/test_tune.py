@@ -219,7 +219,8 @@ def test_killed_worker_leaves_no_trial_running(tmp_path, postgres):
     assert retried  # ...and retried by the survivor with the same parameters
     original = study.trials[retried[0].system_attrs["failed_trial"]]
     assert original.state == optuna.trial.TrialState.FAIL
-    assert retried[0].params == original.params
+    # A trial killed while it drew its parameters has only some: the retry keeps those.
+    assert original.params.items() <= retried[0].params.items()
 
 
 def test_unreachable_database_is_one_line(tmp_path):
