@@ -1,5 +1,7 @@
 #include "ringtrack/experiment/recorded_scenario.hpp"
 
+#include <cmath>
+
 #include "ringtrack/pipeline/deskew.hpp"
 
 namespace ringtrack::experiment {
@@ -8,6 +10,7 @@ RecordedScenario::RecordedScenario(const sim::Scenario& scenario, std::uint64_t 
     : scenario_(scenario), seed_(seed), deskew_(deskew) {
   sim::Simulator simulator(scenario_, seed_);
   model_ = simulator.model();
+  precompute_directions();
   const std::int64_t n = simulator.scan_count();
   scans_.reserve(static_cast<std::size_t>(n));
   sim::SimulatedScan scan;
@@ -17,6 +20,30 @@ RecordedScenario::RecordedScenario(const sim::Scenario& scenario, std::uint64_t 
     c.next_pose = simulator.sensor_pose_at(simulator.scan_stamp_ns(k + 1));
     scans_.push_back(std::move(c));
   }
+}
+
+void RecordedScenario::precompute_directions() {
+  const int rings = model_.rings(), cols = model_.columns();
+  core::OrganizedScan grid(rings, cols);
+  grid.set_uniform_columns(model_, 0);  // the column azimuths every simulated scan has
+  for (int r = 0; r < rings; ++r) {
+    const double el = model_.elevation_rad[static_cast<std::size_t>(r)];
+    cos_el_.push_back(std::cos(el));
+    sin_el_.push_back(std::sin(el));
+    for (int c = 0; c < cols; ++c) {
+      const double az = grid.column_azimuth_rad[static_cast<std::size_t>(c)] +
+                        model_.azimuth_offset_rad[static_cast<std::size_t>(r)];
+      cos_az_.push_back(std::cos(az));
+      sin_az_.push_back(std::sin(az));
+    }
+  }
+}
+
+Eigen::Vector3f RecordedScenario::point(std::size_t i, double range_m) const {
+  const auto ring = i / static_cast<std::size_t>(model_.columns());
+  const double horizontal = range_m * cos_el_[ring];
+  return {static_cast<float>(horizontal * cos_az_[i]), static_cast<float>(horizontal * sin_az_[i]),
+          static_cast<float>(range_m * sin_el_[ring] + model_.vertical_offset_m[ring])};
 }
 
 bool RecordedScenario::moving() const {
@@ -65,10 +92,18 @@ void RecordedScenario::expand(std::size_t k, sim::SimulatedScan& out,
   }
   out.scan.set_uniform_columns(model_, c.stamp_ns);
   out.labels.assign(out.scan.size(), 0);
+  // set_range()'s classification, with the point from the precomputed directions.
   for (std::size_t j = 0; j < c.cells.size(); ++j) {
     const std::size_t i = c.cells[j];
-    out.scan.set_range(model_, out.scan.ring_of(i), out.scan.column_of(i), c.range_m[j],
-                       c.intensity[j]);
+    const int ring = out.scan.ring_of(i), column = out.scan.column_of(i);
+    const float range = c.range_m[j];
+    if (range < model_.min_range_m) {
+      out.scan.set_invalid(ring, column, core::ReturnStatus::kTooClose);
+    } else if (range > model_.max_range_m) {
+      out.scan.set_invalid(ring, column, core::ReturnStatus::kTooFar);
+    } else {
+      out.scan.set_return(ring, column, range, c.intensity[j], point(i, range));
+    }
     out.labels[i] = c.labels[j];
   }
   out.index = static_cast<std::int64_t>(k);

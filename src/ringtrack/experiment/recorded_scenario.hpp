@@ -52,12 +52,19 @@ class RecordedScenario {
     std::vector<sim::ObjectTruth> objects;
   };
   CompactScan compact(const sim::SimulatedScan& scan) const;
+  /// Per-ring elevation and per-cell azimuth terms of SensorModel::point, so that expand() needs
+  /// no trigonometry; the arithmetic is point()'s own, so the points are bit-identical.
+  void precompute_directions();
+  /// Cell i's point at range_m, as SensorModel::point computes it.
+  [[nodiscard]] Eigen::Vector3f point(std::size_t i, double range_m) const;
 
   sim::Scenario scenario_;
   core::SensorModel model_;
   std::uint64_t seed_{1};
   bool deskew_{true};
   std::vector<CompactScan> scans_;
+  std::vector<double> cos_el_, sin_el_;  // per ring
+  std::vector<double> cos_az_, sin_az_;  // per cell (uniform columns plus the ring's offset)
 };
 
 }  // namespace ringtrack::experiment
