@@ -37,6 +37,9 @@ def parse_args(argv):
     p.add_argument("--scenario-files", nargs="*", default=[],
                    help="scenario files (YAML) to tune on as well; never the validation set "
                    "you report on")
+    p.add_argument("--sequences", nargs="*", default=[],
+                   help="sequence folders with objects.csv (ringtrack simulate / convert output "
+                   "plus ground truth) to tune on as well, read once")
     p.add_argument("--sensors", choices=("both", "static", "moving"), default="both",
                    help="sensor motions per scenario (default both: 14 runs for the built-ins)")
     p.add_argument("--duration", type=float, default=30.0,
@@ -287,7 +290,8 @@ def write_outputs(args, out, storage, folds, base_yaml, space):
              f"study, objectives {args.objectives}, seed {args.seed}",
              f"- runs: scenarios {args.scenarios or 'none'}"
              f"{' + ' + ', '.join(args.scenario_files) if args.scenario_files else ''}, "
-             f"sensors {args.sensors}, {args.duration:g} s each",
+             f"sensors {args.sensors}, {args.duration:g} s each"
+             f"{'; sequences ' + ', '.join(args.sequences) if args.sequences else ''}",
              f"- search space: {args.space} ({len(space)} keys)", ""]
     if args.loocv:
         lines += loocv_report(args, out, studies, folds, base_yaml)
@@ -377,8 +381,8 @@ def run(args, argv):
     objectives = objectives_of(args)
     builtins = builtins_of(args)
     base_yaml = base_config_yaml(args)
-    if not builtins and not args.scenario_files:
-        raise TuneError("no runs: --scenarios is empty and no --scenario-files")
+    if not builtins and not args.scenario_files and not args.sequences:
+        raise TuneError("no runs: --scenarios is empty and no --scenario-files or --sequences")
     out = pathlib.Path(args.out)
     storage = make_storage(args, out)  # a database is reached before anything is written
     tuning.ensure_dir(out)
@@ -393,8 +397,11 @@ def run(args, argv):
         children = start_workers(args, argv, args.workers - 1)
     start = time.monotonic()
     try:
-        runs = rt.record_runs(builtins=builtins, scenario_files=args.scenario_files,
-                              duration_s=args.duration, sensors=args.sensors, seed=args.seed)
+        runs = []
+        if builtins or args.scenario_files:
+            runs = rt.record_runs(builtins=builtins, scenario_files=args.scenario_files,
+                                  duration_s=args.duration, sensors=args.sensors, seed=args.seed)
+        runs += [rt.RecordedScenario.from_sequence(folder) for folder in args.sequences]
     except BaseException:
         stop_workers(children)
         raise

@@ -13,21 +13,32 @@
 #include "ringtrack/experiment/evaluate_files.hpp"
 #include "ringtrack/experiment/plan.hpp"
 #include "ringtrack/experiment/recorded_scenario.hpp"
+#include "ringtrack/experiment/recorded_sequence.hpp"
 #include "ringtrack/experiment/results_json.hpp"
 #include "sim_scenario.hpp"
 
 namespace ringtrack::python {
 namespace {
 
-// A recording with the identity the benchmark reports it under.
+// A recording with the identity the benchmark reports it under: a simulated scenario run, or a
+// sequence folder with objects.csv.
 struct Recorded {
   std::shared_ptr<const experiment::RecordedScenario> scans;
+  std::shared_ptr<const experiment::RecordedSequence> sequence;
   bool validation{false};
   std::string stem;
+  [[nodiscard]] std::string name() const {
+    return scans ? scans->scenario().name : sequence->name();
+  }
+  [[nodiscard]] bool moving() const { return scans ? scans->moving() : sequence->moving(); }
+  [[nodiscard]] std::size_t size() const { return scans ? scans->size() : sequence->size(); }
+  [[nodiscard]] std::size_t memory_bytes() const {
+    return scans ? scans->memory_bytes() : sequence->memory_bytes();
+  }
 };
 
 Recorded record(const experiment::PlannedRun& run, std::uint64_t seed, bool deskew) {
-  return {std::make_shared<experiment::RecordedScenario>(run.scenario, seed, deskew),
+  return {std::make_shared<experiment::RecordedScenario>(run.scenario, seed, deskew), nullptr,
           run.validation, run.stem()};
 }
 
@@ -42,7 +53,9 @@ experiment::BenchmarkCaseOptions case_options(bool person_figures, double thresh
 
 experiment::BenchmarkCase run_one(const Recorded& r, const core::Config& config,
                                   const experiment::BenchmarkCaseOptions& options) {
-  experiment::BenchmarkCase c = experiment::run_benchmark_case(*r.scans, config, options);
+  experiment::BenchmarkCase c = r.scans
+                                    ? experiment::run_benchmark_case(*r.scans, config, options)
+                                    : experiment::run_benchmark_case(*r.sequence, config, options);
   c.validation = r.validation;
   return c;
 }
@@ -91,12 +104,23 @@ void bind_recorded(py::module_& m) {
            py::arg("moving") = false, py::arg("deskew") = true)
       .def_readonly("stem", &Recorded::stem, "e.g. \"3-static\", \"V-plaza-moving\"")
       .def_readonly("validation", &Recorded::validation)
-      .def_property_readonly("name", [](const Recorded& r) { return r.scans->scenario().name; })
-      .def_property_readonly("moving", [](const Recorded& r) { return r.scans->moving(); })
-      .def_property_readonly("seed", [](const Recorded& r) { return r.scans->seed(); })
-      .def_property_readonly("memory_bytes",
-                             [](const Recorded& r) { return r.scans->memory_bytes(); })
-      .def("__len__", [](const Recorded& r) { return r.scans->size(); });
+      .def_static(
+          "from_sequence",
+          [](const std::string& folder) {
+            Recorded r;
+            {
+              py::gil_scoped_release release;
+              r.sequence = std::make_shared<experiment::RecordedSequence>(folder);
+            }
+            r.stem = "S-" + r.sequence->name();
+            return r;
+          },
+          py::arg("folder"),
+          "A sequence folder with objects.csv, read once (deskewed as `ringtrack run` does).")
+      .def_property_readonly("name", &Recorded::name)
+      .def_property_readonly("moving", &Recorded::moving)
+      .def_property_readonly("memory_bytes", &Recorded::memory_bytes)
+      .def("__len__", &Recorded::size);
   m.def("record_runs", &record_runs, py::arg("builtins") = std::vector<int>{1, 2, 3, 4, 5, 6, 7},
         py::arg("scenario_files") = std::vector<std::string>{},
         py::arg("duration_s") = py::none(), py::arg("sensors") = "both", py::arg("seed") = 1,

@@ -2,6 +2,7 @@
 (an independent front end over the same library) and against hand-made inputs."""
 
 import json
+import shutil
 
 import numpy as np
 import pytest
@@ -104,3 +105,38 @@ def test_open_a_real_vlp16_capture():
 def test_open_reports_a_missing_file_by_name(tmp_path):
     with pytest.raises(rt.InputError, match="nothing.pcap"):
         rt.open(str(tmp_path / "nothing.pcap"))
+
+
+def assert_same_metrics(ours, theirs):
+    """Counts equal; distances within the rounding of the positions tracks.csv holds."""
+    assert ours.keys() == theirs.keys()
+    for key, value in theirs.items():
+        if isinstance(value, int):
+            assert ours[key] == value, key
+        else:
+            assert ours[key] == pytest.approx(value, abs=1e-5), key
+
+
+def test_recorded_sequence_matches_cli_run_and_eval(simulated_sequence, tmp_path):
+    seq, out = simulated_sequence
+    cli = json.loads(run_cli("eval", "--gt", seq, "--tracks", out / "tracks.csv", "--json").stdout)
+    recorded = rt.RecordedScenario.from_sequence(str(seq))
+    assert len(recorded) == 40 and recorded.stem == "S-crowd" and not recorded.moving
+    ours = rt.run_case(recorded, rt.Config())
+    assert_same_metrics(ours["metrics"], cli["sequences"][0]["metrics"])
+    bare = tmp_path / "no-truth"
+    shutil.copytree(seq, bare)
+    (bare / "objects.csv").unlink()
+    with pytest.raises(rt.InputError, match="no objects.csv"):
+        rt.RecordedScenario.from_sequence(str(bare))
+
+
+def test_recorded_moving_sequence_is_deskewed_as_run_does(tmp_path):
+    seq, out = tmp_path / "moving", tmp_path / "out"
+    run_cli("simulate", "1", "--duration", "3", "--moving-sensor", "--out", seq)
+    run_cli("run", seq, "--out", out, "--quiet", "--no-plots")
+    cli = json.loads(run_cli("eval", "--gt", seq, "--tracks", out / "tracks.csv", "--json").stdout)
+    recorded = rt.RecordedScenario.from_sequence(str(seq))
+    assert recorded.moving
+    assert_same_metrics(rt.run_case(recorded, rt.Config())["metrics"],
+                        cli["sequences"][0]["metrics"])

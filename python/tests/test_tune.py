@@ -132,6 +132,19 @@ def test_loocv_reports_test_mota_and_correlation(tmp_path):
     assert (out / "loocv.png").stat().st_size > 1000
 
 
+def test_sequence_folders_are_tuned_on(tmp_path, simulated_sequence):
+    seq, _ = simulated_sequence
+    out = tmp_path / "seq"
+    tune("--scenarios", "", "--sequences", seq, "--trials", 2, "--out", out, "--quiet")
+    rows = trials(out / "trials.csv")
+    assert len(rows) == 2
+    done = [r for r in rows if r["state"] == "COMPLETE"]
+    assert done and all(0 < float(r["train_mota"]) <= 1 for r in done)
+    r = tune("--scenarios", "", "--sequences", tmp_path / "missing", "--out", out, "--quiet",
+             check=False)
+    assert r.returncode == 2 and "missing" in r.stderr
+
+
 def test_local_workers_share_one_study(tmp_path):
     out = tmp_path / "workers"
     tune("--trials", 12, "--workers", 2, "--out", out, *SMALL)

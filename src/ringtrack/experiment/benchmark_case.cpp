@@ -54,8 +54,15 @@ class CaseRecorder {
     times.total.push_back(result.times.total_ms);
   }
 
+  // Ground truth from a table (recorded sequences): no labels, so no map figures.
+  void set_truth(std::vector<eval::GroundTruthObject> rows) {
+    ground_truth_ = std::move(rows);
+    with_map_ = false;
+  }
+
   // Tallies the points of the scans the filter released (its decisions are final).
   void count_released(const pipeline::Pipeline& pipeline) {
+    if (!with_map_) return;
     for (const mapping::LoggedScan& logged : pipeline.dynamic_filter().released()) {
       const std::vector<std::uint32_t>& labels = pending_labels_.front();
       for (std::size_t p = 0; p < logged.cells.size(); ++p) {
@@ -92,6 +99,7 @@ class CaseRecorder {
   std::set<std::int64_t> ever_moving_;
   std::map<std::int64_t, PointTally> tally_;
   std::deque<std::vector<std::uint32_t>> pending_labels_;  // of the scans in the filter's log
+  bool with_map_ = true;
 };
 
 BenchmarkCase run_case(const sim::Scenario& scenario, const core::SensorModel& model,
@@ -126,6 +134,21 @@ BenchmarkCase run_case(const sim::Scenario& scenario, const core::SensorModel& m
   recorder.count_released(pipeline);
   recorder.evaluate(options, out);
   return out;
+}
+
+// Processes every scan of a recorded sequence and records the results.
+void run_scans(const RecordedSequence& recorded, const core::Config& config,
+               CaseRecorder& recorder, BenchmarkCase& out) {
+  pipeline::Pipeline pipeline(config, recorded.model());
+  for (std::size_t k = 0; k < recorded.size(); ++k) {
+    const auto t0 = Clock::now();
+    const auto& result = pipeline.process(recorded.scan(k), recorded.pose(k));
+    out.pipeline_s += seconds(t0, Clock::now());
+    recorder.add_result(static_cast<std::int64_t>(k), result, out.times);
+  }
+  const auto t1 = Clock::now();
+  pipeline.finish();
+  out.pipeline_s += seconds(t1, Clock::now());
 }
 
 }  // namespace
@@ -168,6 +191,19 @@ BenchmarkCase run_benchmark_case(const RecordedScenario& recorded, const core::C
   };
   return run_case(recorded.scenario(), recorded.model(),
                   static_cast<std::int64_t>(recorded.size()), feed, config, options);
+}
+
+BenchmarkCase run_benchmark_case(const RecordedSequence& recorded, const core::Config& config,
+                                 const BenchmarkCaseOptions& options) {
+  BenchmarkCase out;
+  out.name = recorded.name();
+  out.moving = recorded.moving();
+  out.scans = static_cast<std::int64_t>(recorded.size());
+  CaseRecorder recorder;
+  recorder.set_truth(recorded.ground_truth());
+  run_scans(recorded, config, recorder, out);
+  recorder.evaluate(options, out);
+  return out;
 }
 
 }  // namespace ringtrack::experiment

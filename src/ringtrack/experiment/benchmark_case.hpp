@@ -14,6 +14,7 @@
 #include "ringtrack/eval/map_metrics.hpp"
 #include "ringtrack/eval/tracking_eval.hpp"
 #include "ringtrack/experiment/recorded_scenario.hpp"
+#include "ringtrack/experiment/recorded_sequence.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 #include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/simulator.hpp"
@@ -73,6 +74,12 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
 /// The same on a recorded scenario (its own seed and deskew setting; options.seed and
 /// options.deskew are not used): identical results to the live run with that seed.
 BenchmarkCase run_benchmark_case(const RecordedScenario& recorded, const core::Config& config,
+                                 const BenchmarkCaseOptions& options);
+
+/// The same on a recorded sequence folder against its objects.csv. Without per-cell labels the
+/// map figures stay zero (BenchmarkCase::map); scenario is 0 and name the folder's name;
+/// options.on_scan is not called (there is no simulated scan).
+BenchmarkCase run_benchmark_case(const RecordedSequence& recorded, const core::Config& config,
                                  const BenchmarkCaseOptions& options);
 
 }  // namespace ringtrack::experiment
