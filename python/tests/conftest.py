@@ -8,7 +8,8 @@ import subprocess
 import pytest
 
 SOURCE_DIR = pathlib.Path(os.environ.get("RINGTRACK_SOURCE_DIR", pathlib.Path(__file__).parents[2]))
-CLI = os.environ.get("RINGTRACK_CLI", str(SOURCE_DIR / "build" / "apps" / "ringtrack" / "ringtrack"))
+CLI = str(pathlib.Path(os.environ.get(
+    "RINGTRACK_CLI", SOURCE_DIR / "build" / "apps" / "ringtrack" / "ringtrack")).resolve())
 SHARED_DATA = SOURCE_DIR.parent / "shared" / "data"
 
 

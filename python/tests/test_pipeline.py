@@ -2,13 +2,14 @@
 (an independent front end over the same library) and against hand-made inputs."""
 
 import json
+import re
 import shutil
 
 import numpy as np
 import pytest
 
 import ringtrack as rt
-from conftest import SHARED_DATA, run_cli
+from conftest import SHARED_DATA, SOURCE_DIR, run_cli
 
 
 def test_pipeline_tracks_simulated_people():
@@ -140,3 +141,23 @@ def test_recorded_moving_sequence_is_deskewed_as_run_does(tmp_path):
     assert recorded.moving
     assert_same_metrics(rt.run_case(recorded, rt.Config())["metrics"],
                         cli["sequences"][0]["metrics"])
+
+
+def test_docs_example_runs(tmp_path, monkeypatch):
+    """The examples of docs/python.md, as written, on the sequence they name."""
+    doc = (SOURCE_DIR / "docs" / "python.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", doc, re.S)
+    assert len(blocks) == 2
+    monkeypatch.chdir(tmp_path)
+    run_cli("simulate", "6", "--duration", "8", "--out", tmp_path / "park")
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    scope = {}
+    exec(blocks[0], scope)  # noqa: S102 (our own documentation)
+    assert (tmp_path / "track.png").stat().st_size > 1000
+    assert len(scope["longest"]) > 10
+    second = blocks[1].replace("builtins=[2, 6], duration_s=30", "builtins=[2], duration_s=2")
+    exec(second, scope)  # noqa: S102
+    assert 0 < scope["result"]["groups"]["overall"]["metrics"]["gt_presences"]
