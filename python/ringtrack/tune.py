@@ -69,6 +69,9 @@ def parse_args(argv):
     p.add_argument("--worker", action="store_true",
                    help="join the study and optimise only (no report): what --workers starts, "
                    "and what to start on other machines")
+    p.add_argument("--report", action="store_true",
+                   help="write the outputs from the study as it stands (no trials, no "
+                   "simulation): for a study other machines are running, or an unfinished one")
     p.add_argument("--quiet", action="store_true", help="no progress on stderr")
     a = p.parse_args(argv)
     if a.trials < 1:
@@ -356,6 +359,22 @@ def loocv_report(args, out, studies, folds, base_yaml):
     return lines
 
 
+def report_only(args, out, storage, base_yaml, space):
+    """The outputs of the studies in the storage, as they stand."""
+    names = study_names_in(storage, args)
+    prefix = args.study + "/loo-"
+    if args.loocv:
+        folds = [(n[len(prefix):], None, None) for n in names if n.startswith(prefix)]
+    else:
+        folds = [("all", None, None)] if args.study in names else []
+    if not folds:
+        raise TuneError(f"--report: no {'LOOCV ' if args.loocv else ''}study '{args.study}' in "
+                        f"{args.storage or out / 'study.journal'}")
+    write_outputs(args, out, storage, folds, base_yaml, space)
+    log(args, f"report of {len(folds)} stud{'ies' if len(folds) > 1 else 'y'}: {out}/report.md")
+    return 0
+
+
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
@@ -386,6 +405,8 @@ def run(args, argv):
     out = pathlib.Path(args.out)
     storage = make_storage(args, out)  # a database is reached before anything is written
     tuning.ensure_dir(out)
+    if args.report:
+        return report_only(args, out, storage, base_yaml, space)
     worker_index = int(os.environ.get("RINGTRACK_TUNE_WORKER_INDEX", "0"))
     children = []
     if not args.worker:

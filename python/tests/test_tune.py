@@ -111,6 +111,11 @@ def test_study_writes_outputs_and_resumes(tmp_path):
     again = trials(out / "trials.csv")
     assert len(again) == 5
     assert again[:3] == rows
+    (out / "trials.csv").unlink()
+    tune("--report", "--out", out, *SMALL)  # outputs only, nothing run
+    assert trials(out / "trials.csv") == again
+    r = tune("--report", "--study", "nothing-here", "--out", out, *SMALL, check=False)
+    assert r.returncode == 2 and "no study 'nothing-here'" in r.stderr
 
 
 def test_loocv_reports_test_mota_and_correlation(tmp_path):
