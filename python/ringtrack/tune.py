@@ -205,6 +205,14 @@ def study_name(args, fold):
     return args.study if fold == "all" else f"{args.study}/loo-{fold}"
 
 
+def settings_of(args):
+    """What defines a study's runs and trials, stored with it so that reports say what ran."""
+    return {"sampler": args.sampler, "trials": args.trials, "objectives": args.objectives,
+            "seed": args.seed, "scenarios": args.scenarios, "scenario_files": args.scenario_files,
+            "sequences": [str(s) for s in args.sequences], "sensors": args.sensors,
+            "duration": args.duration, "space": args.space}
+
+
 def optimise(args, storage, folds, space, base_yaml, objectives, worker_index):
     import optuna
     from optuna.study import MaxTrialsCallback
@@ -217,6 +225,8 @@ def optimise(args, storage, folds, space, base_yaml, objectives, worker_index):
         study = optuna.create_study(study_name=study_name(args, fold), storage=storage,
                                     sampler=make_sampler(args, worker_index),
                                     directions=directions, load_if_exists=True)
+        if "settings" not in study.user_attrs:
+            study.set_user_attr("settings", settings_of(args))
         if len(study.get_trials(deepcopy=False, states=states)) >= args.trials:
             continue
         objective = tuning.Objective(space, train, test, base_yaml, objectives, worker)
@@ -288,14 +298,16 @@ def write_outputs(args, out, storage, folds, base_yaml, space):
     studies = {fold: optuna.load_study(study_name=study_name(args, fold), storage=storage)
                for fold, _, _ in folds}
     tuning.write_trials_csv(out / "trials.csv", studies)
+    first = next(iter(studies.values()))
+    st = first.user_attrs.get("settings", settings_of(args))  # as the study was run
     lines = ["# ringtrack tune", "",
-             f"- ringtrack {rt.__version__}, sampler {args.sampler}, {args.trials} trials per "
-             f"study, objectives {args.objectives}, seed {args.seed}",
-             f"- runs: scenarios {args.scenarios or 'none'}"
-             f"{' + ' + ', '.join(args.scenario_files) if args.scenario_files else ''}, "
-             f"sensors {args.sensors}, {args.duration:g} s each"
-             f"{'; sequences ' + ', '.join(args.sequences) if args.sequences else ''}",
-             f"- search space: {args.space} ({len(space)} keys)", ""]
+             f"- ringtrack {rt.__version__}, sampler {st['sampler']}, {st['trials']} trials per "
+             f"study, objectives {st['objectives']}, seed {st['seed']}",
+             f"- runs: scenarios {st['scenarios'] or 'none'}"
+             f"{' + ' + ', '.join(st['scenario_files']) if st['scenario_files'] else ''}, "
+             f"sensors {st['sensors']}, {st['duration']:g} s each"
+             f"{'; sequences ' + ', '.join(st['sequences']) if st['sequences'] else ''}",
+             f"- search space: {st['space']} ({len(space)} keys)", ""]
     if args.loocv:
         lines += loocv_report(args, out, studies, folds, base_yaml)
     else:
