@@ -150,6 +150,14 @@ py::array_t<float> grid_view(const core::OrganizedScan& s, const std::vector<flo
   return view(v, {s.rings(), s.columns()}, owner);
 }
 
+// A property returning one of the scan's per-cell float arrays as a (rings, columns) view.
+auto grid_property(const std::vector<float>& (core::OrganizedScan::*array)() const) {
+  return [array](py::object self) {
+    const auto& s = self.cast<const core::OrganizedScan&>();
+    return grid_view(s, (s.*array)(), self);
+  };
+}
+
 core::OrganizedScan scan_from_ranges(const core::SensorModel& model,
                                      py::array_t<float, py::array::c_style | py::array::forcecast>
                                          ranges,
@@ -196,31 +204,11 @@ void bind_scan(py::module_& m) {
       .def_property_readonly("rings", &core::OrganizedScan::rings)
       .def_property_readonly("columns", &core::OrganizedScan::columns)
       .def_readonly("stamp_ns", &core::OrganizedScan::stamp_ns)
-      .def_property_readonly("ranges",
-                             [](py::object self) {
-                               const auto& s = self.cast<const core::OrganizedScan&>();
-                               return grid_view(s, s.ranges(), self);
-                             })
-      .def_property_readonly("intensity",
-                             [](py::object self) {
-                               const auto& s = self.cast<const core::OrganizedScan&>();
-                               return grid_view(s, s.intensities(), self);
-                             })
-      .def_property_readonly("x",
-                             [](py::object self) {
-                               const auto& s = self.cast<const core::OrganizedScan&>();
-                               return grid_view(s, s.xs(), self);
-                             })
-      .def_property_readonly("y",
-                             [](py::object self) {
-                               const auto& s = self.cast<const core::OrganizedScan&>();
-                               return grid_view(s, s.ys(), self);
-                             })
-      .def_property_readonly("z",
-                             [](py::object self) {
-                               const auto& s = self.cast<const core::OrganizedScan&>();
-                               return grid_view(s, s.zs(), self);
-                             })
+      .def_property_readonly("ranges", grid_property(&core::OrganizedScan::ranges))
+      .def_property_readonly("intensity", grid_property(&core::OrganizedScan::intensities))
+      .def_property_readonly("x", grid_property(&core::OrganizedScan::xs))
+      .def_property_readonly("y", grid_property(&core::OrganizedScan::ys))
+      .def_property_readonly("z", grid_property(&core::OrganizedScan::zs))
       .def_property_readonly(
           "status",
           [](py::object self) {
