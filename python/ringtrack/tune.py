@@ -391,6 +391,12 @@ def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
     try:
+        import optuna  # noqa: F401
+    except ImportError:
+        print("ringtrack tune: Optuna is not installed (apt-get install python3-optuna, or "
+              "scripts/bootstrap)", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    try:
         return run(args, argv)
     except TuneError as e:
         print(f"ringtrack tune: {e}", file=sys.stderr)
