@@ -127,6 +127,8 @@ def make_storage(args, out):
     url = args.storage or f"journal:{out / 'study.journal'}"
     if url.startswith("journal:"):
         path = url[len("journal:"):]
+        if args.report and not os.path.exists(path):
+            raise TuneError(f"--report: {path}: no such study journal")
         tuning.ensure_dir(pathlib.Path(path).parent)
         from optuna.storages import JournalFileStorage, JournalStorage
 
