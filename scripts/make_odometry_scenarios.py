@@ -7,9 +7,9 @@ Deterministic: running it again gives the same files.
 
 Each file is a built-in world (config/scenarios/) with a scripted sensor (keyframes every 0.1 s
 or finer) that looks like real use, 100 s long:
-  town-drive       a car roof sensor (2 m) starting from rest and driving 10 m/s back and forth
-                   along the longest straight street of the town that keeps 6 m from every solid,
-                   braking to 4 m/s (3 m/s^2) for a U-turn at each end
+  town-drive       a vehicle roof sensor (2 m) driving back and forth along the longest straight
+                   street of the town that keeps 4 m from every solid: from rest to 10 m/s and
+                   back to rest at 3 m/s^2, turning on the spot (4 s) at each end
   industrial-walk  a handheld sensor (1.4 m) carried at 1.4 m/s around the longest rounded
                    rectangle of the industrial site that keeps 1.5 m from every solid, bobbing
                    3 cm, pitching +-4 deg with the steps and +-8 deg slowly, rolling +-2 deg, and
@@ -36,9 +36,10 @@ def load(name):
         return yaml.safe_load(f)
 
 
-def clearance_grid(world, half_m, cell_m=0.5):
+def clearance_grid(world, half_m, cell_m=0.5, top_m=1e9):
     """Horizontal distance to the nearest solid on a grid of cell_m over [-half_m, half_m]^2
-    (conservative 2-D footprints: boxes, cylinders, ellipsoid crowns at full radius, walls)."""
+    (conservative 2-D footprints: boxes, cylinders, ellipsoids reaching below top_m at full
+    radius, walls)."""
     axis = np.arange(-half_m, half_m + cell_m / 2, cell_m)
     x, y = np.meshgrid(axis, axis, indexing="ij")
     best = np.full(x.shape, 1e9)
@@ -55,7 +56,9 @@ def clearance_grid(world, half_m, cell_m=0.5):
         cx, cy = c["center_m"]
         best = np.minimum(best, np.hypot(x - cx, y - cy) - c["radius_m"])
     for e in world.get("ellipsoids") or []:
-        cx, cy, _ = e["center_m"]
+        cx, cy, cz = e["center_m"]
+        if cz - e["radii_m"][2] > top_m:  # a crown above the sensor's path
+            continue
         best = np.minimum(best, np.hypot(x - cx, y - cy) - max(e["radii_m"][0], e["radii_m"][1]))
     for w in world.get("walls") or []:
         (ax, ay), (bx, by) = w["from_m"], w["to_m"]
@@ -139,8 +142,7 @@ def scenario_with(world, name, description, keyframes):
 
 
 def kf(t, x, y, z, roll, pitch, yaw):
-    return [round(t, 3), round(x, 3), round(y, 3), round(z, 3), round(roll, 3), round(pitch, 3),
-            round(yaw, 3)]
+    return [round(float(v), 3) for v in (t, x, y, z, roll, pitch, yaw)]
 
 
 def unwrap_deg(heading_rad, previous_deg):
@@ -152,14 +154,6 @@ def unwrap_deg(heading_rad, previous_deg):
     while d - previous_deg < -180:
         d += 360
     return d
-
-
-def drive_distance(t, speed, accel):
-    """Distance after t s of a start from rest at accel up to speed."""
-    t_acc = speed / accel
-    if t <= t_acc:
-        return 0.5 * accel * t * t
-    return 0.5 * accel * t_acc * t_acc + speed * (t - t_acc)
 
 
 def longest_clear_line(grid, min_clear, reach):
@@ -183,66 +177,60 @@ def longest_clear_line(grid, min_clear, reach):
     return best
 
 
-def shuttle_path(a, b, turn_radius):
-    """Back and forth between a and b with a U-turn (left, radius turn_radius) at each end, as a
-    list of (x, y, heading, is_turn) samples every 0.05 m."""
-    (ax, ay), (bx, by) = a, b
-    length = math.hypot(bx - ax, by - ay)
-    h = math.atan2(by - ay, bx - ax)
-    out = []
-    ux, uy = math.cos(h), math.sin(h)
-    nx, ny = -uy, ux  # left
-    lanes = [((ax, ay), h), ((bx + 2 * turn_radius * nx, by + 2 * turn_radius * ny), h + math.pi)]
-    for (sx, sy), head in lanes:
-        hx, hy = math.cos(head), math.sin(head)
-        for s in np.arange(0.0, length, 0.05):
-            out.append((sx + s * hx, sy + s * hy, head, False))
-        ex, ey = sx + length * hx, sy + length * hy
-        cx, cy = ex - hy * turn_radius, ey + hx * turn_radius  # centre to the left
-        for phi in np.arange(0.0, math.pi, 0.05 / turn_radius):
-            ang = head - 0.5 * math.pi + phi
-            out.append((cx + turn_radius * math.cos(ang), cy + turn_radius * math.sin(ang),
-                        head + phi, True))
-    return out
+def trapezoid_distance(t, length, cruise, accel):
+    """Distance after t s along a leg of `length` from rest to rest (accelerate, cruise, brake)."""
+    t_acc = cruise / accel
+    d_acc = 0.5 * accel * t_acc * t_acc
+    if 2 * d_acc > length:  # never reaches cruise speed
+        t_acc = math.sqrt(length / accel)
+        d_acc, cruise = 0.5 * length, accel * t_acc
+    t_cruise = (length - 2 * d_acc) / cruise
+    if t < t_acc:
+        return 0.5 * accel * t * t
+    if t < t_acc + t_cruise:
+        return d_acc + cruise * (t - t_acc)
+    tb = min(t - t_acc - t_cruise, t_acc)
+    return d_acc + cruise * t_cruise + cruise * tb - 0.5 * accel * tb * tb
 
 
-def drive_times(path, cruise, turn_speed, accel, duration):
-    """Sample index along the (looped) path at every 0.1 s: cruise on straights, turn_speed in
-    turns, braking and accelerating at accel; starts from rest."""
-    n = len(path)
-    turn_ahead = [0.0] * n  # distance to the next turn sample
-    dist = 1e9
-    for i in range(2 * n - 1, -1, -1):
-        dist = 0.0 if path[i % n][3] else dist + 0.05
-        if i < n:
-            turn_ahead[i] = dist
-    v, pos, t, out = 0.0, 0.0, 0.0, []
-    next_sample = 0.0
-    while t <= duration + 1e-9:
-        i = int(pos / 0.05) % n
-        target = turn_speed if path[i][3] else min(cruise, math.sqrt(turn_speed ** 2 + 2 * accel * turn_ahead[i]))
-        v = min(target, v + accel * 0.01) if v < target else max(target, v - accel * 0.01)
-        if t >= next_sample - 1e-9:
-            out.append((round(next_sample, 3), i))
-            next_sample += 0.1
-        pos += v * 0.01
-        t += 0.01
-    return out
+def leg_time(length, cruise, accel):
+    """Duration of such a leg."""
+    t_acc = cruise / accel
+    if accel * t_acc * t_acc > length:
+        return 2 * math.sqrt(length / accel)
+    return 2 * t_acc + (length - accel * t_acc * t_acc) / cruise
 
 
 def town_drive():
     world = load("5-town.yaml")
-    grid = clearance_grid(world, 140.0)
-    length, (a, b) = longest_clear_line(grid, 6.0, 125.0)
-    path = shuttle_path(a, b, 5.0)
-    frames, yaw = [], None
-    for t, i in drive_times(path, 10.0, 4.0, 3.0, DURATION_S):
-        x, y, h, _ = path[i]
-        yaw = unwrap_deg(h, yaw)
+    grid = clearance_grid(world, 140.0, top_m=3.0)
+    length, (a, b) = longest_clear_line(grid, 4.0, 125.0)
+    # The street ends where something stands: stop 10 m before.
+    ux, uy = (b[0] - a[0]) / length, (b[1] - a[1]) / length
+    a, b = (a[0] + 10 * ux, a[1] + 10 * uy), (b[0] - 10 * ux, b[1] - 10 * uy)
+    length -= 20
+    heading = math.degrees(math.atan2(uy, ux))
+    cruise, accel, spin_s = 10.0, 3.0, 4.0
+    t_leg = leg_time(length, cruise, accel)
+    frames = []
+    for k in range(int(DURATION_S / 0.1) + 1):
+        t = 0.1 * k
+        cycle, leg = divmod(t, t_leg + spin_s)
+        forward = int(cycle) % 2 == 0
+        start, direction = (a, 1.0) if forward else (b, -1.0)
+        yaw = heading + 180.0 * (int(cycle) % 2) + 360.0 * (int(cycle) // 2)
+        if leg <= t_leg:
+            d = trapezoid_distance(leg, length, cruise, accel)
+            x, y = start[0] + direction * d * ux, start[1] + direction * d * uy
+        else:  # turning on the spot at the end of the street (a skid-steer vehicle)
+            x, y = (b if forward else a)
+            u = (leg - t_leg) / spin_s
+            yaw += 180.0 * (3 * u * u - 2 * u * u * u)
         frames.append(kf(t, x, y, 2.0, 0.0, 0.0, yaw))
-    desc = ("town, a car roof sensor (2 m) driving 10 m/s back and forth along the longest clear "
-            "straight street (%.0f m from (%.0f, %.0f) to (%.0f, %.0f)), braking to 4 m/s for a "
-            "U-turn at each end, from rest, 100 s" % (length, a[0], a[1], b[0], b[1]))
+    desc = ("town, a vehicle roof sensor (2 m) driving the longest clear straight street (%.0f m "
+            "from (%.0f, %.0f) to (%.0f, %.0f)) back and forth: from rest to 10 m/s and back to "
+            "rest at 3 m/s^2, turning on the spot in 4 s at each end, 100 s"
+            % (length, a[0], a[1], b[0], b[1]))
     return scenario_with(world, "town-drive", desc, frames)
 
 
