@@ -21,8 +21,11 @@ constexpr int kMaxTangentColumns = 30;
 // at kLeverM range by more than this over the revolution (m): on turning MAVs, not on cars.
 constexpr double kSecondPassShiftM = 0.02;
 constexpr double kLeverM = 20.0;
-// Iterations of the first registration when a second one follows the compensation.
+// Iterations of the first registration when more follow the compensation, and passes at most.
 constexpr int kFirstPassIterations = 6;
+constexpr int kMaxPasses = 3;
+// The first scans enter the map at once: it is too sparse yet to wait for the next pose.
+constexpr std::size_t kEarlyScans = 5;
 
 bool usable(const core::OrganizedScan& scan, std::size_t i) {
   if (!scan.valid(i)) return false;
@@ -201,7 +204,7 @@ void Odometry::insert_pending(const Eigen::Isometry3d& actual, double actual_dt_
   pending_.clear();
 }
 
-void Odometry::commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, bool compensated) {
+void Odometry::commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, double dt_s) {
   if (scans_ > 0) {
     motion_ = last_pose_.inverse() * pose;
     motion_dt_s_ = 1e-9 * static_cast<double>(stamp_ns - last_stamp_ns_);
@@ -211,13 +214,19 @@ void Odometry::commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, bool
   last_stamp_ns_ = stamp_ns;
   ++scans_;
   // This scan enters the map once the next one has been registered (see insert_pending), unless
-  // the map is empty: the next scan needs something to register against.
+  // the map is empty or young: the next scan needs enough to register against.
+  if (scans_ == 1 && config_.deskew) {  // kept until the first velocity is known
+    first_frame_ = frame_;
+    first_time_s_ = frame_time_s_;
+  }
   pending_.swap(frame_);
   pending_time_s_.swap(frame_time_s_);
   pending_pose_ = pose;
-  pending_used_ = compensated ? motion_ : Eigen::Isometry3d::Identity();
-  pending_used_dt_s_ = compensated ? motion_dt_s_ : 0.0;
-  if (map_.voxel_count() == 0) insert_pending(Eigen::Isometry3d::Identity(), 0.0);
+  pending_used_ = applied_;
+  pending_used_dt_s_ = dt_s;
+  if (map_.voxel_count() == 0 || scans_ <= kEarlyScans) {
+    insert_pending(Eigen::Isometry3d::Identity(), 0.0);
+  }
   const Eigen::Vector3f here = pose.translation().cast<float>();
   // Cropping walks every voxel: only after the sensor moved a twentieth of the radius.
   if ((here - last_crop_).norm() > 0.05 * config_.map_radius_m) {
@@ -243,21 +252,19 @@ bool Odometry::register_scan(const Eigen::Isometry3d& predicted, int max_iterati
   return icp.converged;
 }
 
-double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate, double dt_s) const {
-  const Eigen::Isometry3d used = motion_dt_s_ > 0 ? scale_motion(motion_, dt_s / motion_dt_s_)
-                                                  : Eigen::Isometry3d::Identity();
-  const Eigen::Isometry3d change = (last_pose_.inverse() * estimate) * used.inverse();
+double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate) const {
+  const Eigen::Isometry3d change = (last_pose_.inverse() * estimate) * applied_.inverse();
   return change.translation().norm() +
          kLeverM * Eigen::AngleAxisd(change.linear()).angle();
 }
 
 void Odometry::refine_deskew(core::OrganizedScan& scan, const Eigen::Isometry3d& estimate,
                              double dt_s) {
-  // The motion the scan was compensated with, over this scan's interval, and the one its
+  // The motion the scan was compensated with (over this scan's interval) and the one its
   // estimate implies; the difference is applied on top.
-  const Eigen::Isometry3d used = motion_dt_s_ > 0 ? scale_motion(motion_, dt_s / motion_dt_s_)
-                                                  : Eigen::Isometry3d::Identity();
-  const Eigen::Isometry3d correction = (last_pose_.inverse() * estimate) * used.inverse();
+  const Eigen::Isometry3d implied = last_pose_.inverse() * estimate;
+  const Eigen::Isometry3d correction = implied * applied_.inverse();
+  applied_ = implied;
   deskew_constant_velocity(scan, correction, dt_s);
   // The selected points too, to first order (the correction is small): cheaper than selecting
   // them again from the whole scan.
@@ -270,9 +277,45 @@ void Odometry::refine_deskew(core::OrganizedScan& scan, const Eigen::Isometry3d&
   for (std::size_t k = 0; k < source_.size(); ++k) {
     source_[k] += source_time_s_[k] * (w.cross(source_[k]) + v);
   }
-  // The first scan entered the map uncompensated (no velocity was known): start again from this
-  // one, now compensated.
-  if (scans_ == 1) map_.clear();
+  if (scans_ == 1 && !first_frame_.empty()) restart_map(implied, dt_s);
+}
+
+void Odometry::refine_passes(core::OrganizedScan& scan, double dt_s, bool converged,
+                             OdometryResult& result, Eigen::Isometry3d& estimate) {
+  // Compensated with the motion its estimate implies, the scan is registered again from there
+  // while that moves the points noticeably: the velocity of the scan before lags too much on a
+  // turning MAV or a shaking hand.
+  for (int pass = 0; pass < kMaxPasses; ++pass) {
+    const bool changed = deskew_correction_m(estimate) > kSecondPassShiftM;
+    refine_deskew(scan, estimate, dt_s);
+    if (!changed && converged) return;
+    OdometryResult again = result;
+    again.iterations = 0;
+    Eigen::Isometry3d refined = estimate;
+    converged = register_scan(estimate, config_.max_iterations, again, refined);
+    if (!again.registered) return;
+    estimate = refined;
+    result.iterations += again.iterations;
+    result.correspondences = again.correspondences;
+  }
+}
+
+void Odometry::restart_map(const Eigen::Isometry3d& first_motion, double dt_s) {
+  // The first scan entered the map uncompensated (no velocity was known then): rebuild the map
+  // from it compensated with the motion now known, so that the second pass, and every scan after,
+  // registers against a consistent start (else its skew stays in the map as a tilt).
+  map_.clear();
+  const Eigen::AngleAxisd aa(first_motion.linear());
+  const Eigen::Vector3f w = (aa.angle() * aa.axis() / dt_s).cast<float>();
+  const Eigen::Vector3f v = (first_motion.translation() / dt_s).cast<float>();
+  const Eigen::Isometry3f to_world = last_pose_.cast<float>();
+  for (std::size_t k = 0; k < first_frame_.size(); ++k) {
+    const Eigen::Vector3f& p = first_frame_[k];
+    first_frame_[k] = to_world * (p + first_time_s_[k] * (w.cross(p) + v));
+  }
+  map_.insert(first_frame_);
+  first_frame_.clear();
+  first_frame_.shrink_to_fit();
 }
 
 OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core::Box3> excluded) {
@@ -285,7 +328,11 @@ OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core
   const double dt_s =
       scans_ == 0 ? 0.0 : 1e-9 * static_cast<double>(scan.stamp_ns - last_stamp_ns_);
   const Eigen::Isometry3d predicted = scans_ == 0 ? start_ : predict(dt_s);
-  if (config_.deskew && motion_dt_s_ > 0) deskew_constant_velocity(scan, motion_, motion_dt_s_);
+  applied_ = Eigen::Isometry3d::Identity();
+  if (config_.deskew && motion_dt_s_ > 0) {
+    deskew_constant_velocity(scan, motion_, motion_dt_s_);
+    applied_ = scale_motion(motion_, dt_s / motion_dt_s_);
+  }
   select_points(scan, predicted, excluded, result);
   compute_normals(scan);
   Eigen::Isometry3d estimate = predicted;
@@ -302,24 +349,11 @@ OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core
   result.weakest_share = weakest_translation_share(valid_normals_);
   result.degenerate = !result.registered || result.weakest_share < config_.degeneracy_threshold;
   const bool refine = result.registered && config_.deskew && scans_ > 0;
-  const bool changed = refine && deskew_correction_m(estimate, dt_s) > kSecondPassShiftM;
-  if (refine) refine_deskew(scan, estimate, dt_s);
-  if (changed || !converged) {
-    // Compensated with the motion this estimate implies, the scan is registered once more from
-    // there: the velocity of the scan before lags too much on a turning MAV.
-    OdometryResult second = result;
-    Eigen::Isometry3d refined = estimate;
-    register_scan(estimate, config_.max_iterations, second, refined);
-    if (second.registered) {
-      estimate = refined;
-      result.iterations = second.iterations;
-      result.correspondences = second.correspondences;
-    }
-  }
+  if (refine) refine_passes(scan, dt_s, converged, result, estimate);
   if (result.registered && scans_ > 0) update_threshold(predicted, estimate);
   // A scan that did not register keeps its prediction but adds nothing to the map.
   if (!result.registered) frame_.clear();
-  commit(estimate, scan.stamp_ns, refine);
+  commit(estimate, scan.stamp_ns, dt_s);
   // Where the scene does not fix the motion (a plain), the velocity learned from it would be
   // extrapolated scan after scan and run away: assume the sensor stops until geometry returns.
   if (result.degenerate) motion_ = Eigen::Isometry3d::Identity();

@@ -79,12 +79,17 @@ class Odometry {
                      Eigen::Isometry3d& estimate);
   /// How far (m, at 20 m range) compensating with the estimate's motion instead of the predicted
   /// one moves points over a revolution.
-  [[nodiscard]] double deskew_correction_m(const Eigen::Isometry3d& estimate, double dt_s) const;
+  [[nodiscard]] double deskew_correction_m(const Eigen::Isometry3d& estimate) const;
+  /// Compensates and registers again while the compensation changes noticeably.
+  void refine_passes(core::OrganizedScan& scan, double dt_s, bool converged, OdometryResult& result,
+                     Eigen::Isometry3d& estimate);
   /// Compensates the scan again with the velocity its estimate implies and reselects its points.
   void refine_deskew(core::OrganizedScan& scan, const Eigen::Isometry3d& estimate, double dt_s);
-  /// Moves the pose history on, puts the previous scan into the map and holds this one back;
-  /// compensated: the frame was compensated with the motion from the previous pose to `pose`.
-  void commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, bool compensated);
+  /// Rebuilds the map from the first scan compensated with the first motion (second scan).
+  void restart_map(const Eigen::Isometry3d& first_motion, double dt_s);
+  /// Moves the pose history on, puts the previous scan into the map and holds this one back
+  /// (its frame compensated with applied_ over dt_s).
+  void commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, double dt_s);
   /// Corrects the held-back scan's compensation with its true motion and adds it to the map.
   void insert_pending(const Eigen::Isometry3d& actual, double actual_dt_s);
 
@@ -98,6 +103,8 @@ class Odometry {
   // The last scan's points (sensor frame), held back until the next pose is known.
   std::vector<Eigen::Vector3f> pending_;
   std::vector<float> pending_time_s_;
+  std::vector<Eigen::Vector3f> first_frame_;  // the first scan's points, until the second scan
+  std::vector<float> first_time_s_;
   Eigen::Isometry3d pending_pose_{Eigen::Isometry3d::Identity()};
   Eigen::Isometry3d pending_used_{Eigen::Isometry3d::Identity()};  // compensated with this ...
   double pending_used_dt_s_{0.0};                                   // ... motion over this time
@@ -106,6 +113,7 @@ class Odometry {
   Eigen::Isometry3d last_pose_{Eigen::Isometry3d::Identity()};
   Eigen::Isometry3d motion_{Eigen::Isometry3d::Identity()};  // last scan-to-scan motion
   double motion_dt_s_{0.0};                                  // ... and its duration
+  Eigen::Isometry3d applied_{Eigen::Isometry3d::Identity()};  // this scan compensated with this
   std::int64_t last_stamp_ns_{0};
   double error_sse_{0.0};
   std::size_t error_samples_{0};
