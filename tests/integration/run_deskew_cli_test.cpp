@@ -126,9 +126,11 @@ double filtered_spread(const fs::path& seq, const fs::path& run) {
   return s.rms_m;
 }
 
+// The summary line that starts with key (paths in other lines may contain the word).
 std::string summary_line(const std::string& out, const std::string& key) {
-  const auto at = out.find(key);
+  std::size_t at = out.rfind(key + " ", 0) == 0 ? 0 : out.find("\n" + key + " ");
   if (at == std::string::npos) return {};
+  if (out[at] == '\n') ++at;
   return out.substr(at, out.find('\n', at) - at);
 }
 
