@@ -258,16 +258,15 @@ double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate) const {
          kLeverM * Eigen::AngleAxisd(change.linear()).angle();
 }
 
-void Odometry::refine_deskew(core::OrganizedScan& scan, const Eigen::Isometry3d& estimate,
-                             double dt_s) {
+void Odometry::refine_deskew(const Eigen::Isometry3d& estimate, double dt_s) {
   // The motion the scan was compensated with (over this scan's interval) and the one its
   // estimate implies; the difference is applied on top.
   const Eigen::Isometry3d implied = last_pose_.inverse() * estimate;
   const Eigen::Isometry3d correction = implied * applied_.inverse();
   applied_ = implied;
-  deskew_constant_velocity(scan, correction, dt_s);
-  // The selected points too, to first order (the correction is small): cheaper than selecting
-  // them again from the whole scan.
+  // The selected points, to first order (the correction is small): cheaper than compensating
+  // the whole scan again and selecting them anew (the scan itself is compensated once, after the
+  // last pass).
   const Eigen::AngleAxisd aa(correction.linear());
   const Eigen::Vector3f w = (aa.angle() * aa.axis() / dt_s).cast<float>();
   const Eigen::Vector3f v = (correction.translation() / dt_s).cast<float>();
@@ -285,19 +284,21 @@ void Odometry::refine_passes(core::OrganizedScan& scan, double dt_s, bool conver
   // Compensated with the motion its estimate implies, the scan is registered again from there
   // while that moves the points noticeably: the velocity of the scan before lags too much on a
   // turning MAV or a shaking hand.
+  const Eigen::Isometry3d scan_applied = applied_;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
     const bool changed = deskew_correction_m(estimate) > kSecondPassShiftM;
-    refine_deskew(scan, estimate, dt_s);
-    if (!changed && converged) return;
+    refine_deskew(estimate, dt_s);
+    if (!changed && converged) break;
     OdometryResult again = result;
     again.iterations = 0;
     Eigen::Isometry3d refined = estimate;
     converged = register_scan(estimate, config_.max_iterations, again, refined);
-    if (!again.registered) return;
+    if (!again.registered) break;
     estimate = refined;
     result.iterations += again.iterations;
     result.correspondences = again.correspondences;
   }
+  deskew_constant_velocity(scan, applied_ * scan_applied.inverse(), dt_s);
 }
 
 void Odometry::restart_map(const Eigen::Isometry3d& first_motion, double dt_s) {

@@ -83,8 +83,8 @@ class Odometry {
   /// Compensates and registers again while the compensation changes noticeably.
   void refine_passes(core::OrganizedScan& scan, double dt_s, bool converged, OdometryResult& result,
                      Eigen::Isometry3d& estimate);
-  /// Compensates the scan again with the velocity its estimate implies and reselects its points.
-  void refine_deskew(core::OrganizedScan& scan, const Eigen::Isometry3d& estimate, double dt_s);
+  /// Compensates the selected points again with the motion the estimate implies (applied_).
+  void refine_deskew(const Eigen::Isometry3d& estimate, double dt_s);
   /// Rebuilds the map from the first scan compensated with the first motion (second scan).
   void restart_map(const Eigen::Isometry3d& first_motion, double dt_s);
   /// Moves the pose history on, puts the previous scan into the map and holds this one back

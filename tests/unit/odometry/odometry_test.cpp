@@ -13,6 +13,7 @@
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/odometry/registration.hpp"
 #include "ringtrack/odometry/voxel_map.hpp"
+#include "ringtrack/sim/scenario_file.hpp"
 #include "ringtrack/sim/simple_scene.hpp"
 #include "ringtrack/sim/simulator.hpp"
 
@@ -377,6 +378,20 @@ TEST(Odometry, InconsistentRangesAreAConfigError) {
   c.min_range_m = 50.0;
   c.max_range_m = 10.0;
   EXPECT_THROW(odometry::Odometry{c}, core::ConfigError);
+}
+
+// The moving-sensor scenarios of docs/odometry.md load, validate (paths clear of every solid)
+// and last 100 s with a scripted sensor.
+TEST(OdometryScenarios, FilesLoadWithAScriptedSensorFor100Seconds) {
+  for (const char* name : {"town-drive", "industrial-walk", "park-climb"}) {
+    const auto s = sim::load_scenario_file(std::string(RINGTRACK_SOURCE_DIR) + "/config/odometry/" +
+                                           name + ".yaml");
+    EXPECT_EQ(s.name, name);
+    EXPECT_EQ(s.duration_s, 100.0) << name;
+    EXPECT_EQ(s.sensor.motion, sim::SensorMotion::kScripted) << name;
+    ASSERT_FALSE(s.sensor.keyframes.empty()) << name;
+    EXPECT_GE(s.sensor.keyframes.back().t_s, 100.0) << name;
+  }
 }
 
 }  // namespace
