@@ -401,8 +401,9 @@ class Schema {
   void build_odometry(OdometryConfig& o) {
     section_ = "odometry";
     number("voxel_size_m", o.voxel_size_m, 0.05, 20.0,
-           "local-map voxel edge (m); correspondences are searched within one voxel, so this also "
-           "caps the correspondence distance (outdoors about max range / 100, indoors smaller)");
+           "local-map voxel edge (m); correspondences are searched within half a voxel (one "
+           "voxel until the first velocity is known), so this also caps the correspondence "
+           "distance (outdoors about max range / 100, indoors smaller)");
     integer("max_points_per_voxel", o.max_points_per_voxel, 1, 1000,
             "points a map voxel keeps at most: bounds memory and the nearest-neighbour search");
     number("map_spacing_m", o.map_spacing_m, 0.01, 20.0,
