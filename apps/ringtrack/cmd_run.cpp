@@ -31,6 +31,7 @@
 #include "ringtrack/io/sequence.hpp"
 #include "ringtrack/io/text.hpp"
 #include "ringtrack/mapping/static_map.hpp"
+#include "ringtrack/odometry/odometry.hpp"
 #include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 #include "ringtrack/version.hpp"
@@ -61,20 +62,77 @@ struct RunOptions {
   std::uint32_t mcap_map_every{0};
   bool filtered_scans{false};
   bool no_deskew{false};
+  std::string odometry{"auto"};
+  std::string odometry_start;
   bool quiet{false};
   bool no_plots{false};
   ConfigOptions config;
 };
 
-io::TimingRow timing_row(std::uint64_t scan, std::int64_t stamp_ns, const pipeline::StageTimes& t) {
-  return {scan,
-          stamp_ns,
-          {{"segmentation", t.segmentation_ms},
-           {"detection", t.detection_ms},
-           {"tracking", t.tracking_ms},
-           {"mapping", t.mapping_ms}},
-          t.total_ms};
+io::TimingRow timing_row(std::uint64_t scan, std::int64_t stamp_ns, const pipeline::StageTimes& t,
+                         bool odometry) {
+  io::TimingRow row{scan, stamp_ns, {}, t.total_ms};
+  row.stages.reserve(5);
+  // Only runs that estimate their poses have the column: other runs' files stay as they were.
+  if (odometry) row.stages.push_back({"odometry", t.odometry_ms});
+  row.stages.push_back({"segmentation", t.segmentation_ms});
+  row.stages.push_back({"detection", t.detection_ms});
+  row.stages.push_back({"tracking", t.tracking_ms});
+  row.stages.push_back({"mapping", t.mapping_ms});
+  return row;
 }
+
+// Whether the odometry estimates the poses: --odometry on, or auto for a recording (pcap, bag,
+// stream) without --poses. Folders without poses keep the documented static sensor under auto.
+bool use_odometry(const std::string& mode, const std::string& input, const std::string& format,
+                  const std::string& poses) {
+  if (mode == "off") return false;
+  if (!poses.empty()) {
+    if (mode == "on") {
+      throw core::InputError("--odometry on and --poses exclude each other: give one pose source");
+    }
+    return false;
+  }
+  if (mode == "on") return true;
+  const bool folder = std::filesystem::is_directory(input) && format == "auto" &&
+                      !std::filesystem::exists(std::filesystem::path(input) / "metadata.yaml") &&
+                      !io::is_mcap_bag(input);
+  return !folder;
+}
+
+// Per-scan account of the odometry (odometry.csv) and its totals for the summary.
+class OdometryLog {
+ public:
+  explicit OdometryLog(const fs::path& path) : file_(path) {
+    file_.write(
+        "scan,stamp,x,y,z,qx,qy,qz,qw,registered,degenerate,weakest_share,iterations,"
+        "source_points,correspondences,excluded_points,threshold_m,odometry_ms\n");
+  }
+  void write(std::size_t index, const odometry::OdometryResult& r, double ms) {
+    char line[512];
+    const auto& t = r.pose.translation;
+    const auto& q = r.pose.rotation;
+    std::snprintf(line, sizeof line,
+                  "%zu,%s,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%d,%d,%.5f,%d,%zu,%zu,%zu,%.4f,%.4f\n",
+                  index, io::format_stamp(r.pose.stamp_ns).c_str(), t.x(), t.y(), t.z(), q.x(),
+                  q.y(), q.z(), q.w(), r.registered ? 1 : 0, r.degenerate ? 1 : 0,
+                  r.weakest_share, r.iterations, r.source_points, r.correspondences,
+                  r.excluded_points, r.threshold_m, ms);
+    file_.write(std::string_view(line));
+    ++scans_;
+    if (r.degenerate) ++degenerate_;
+    times_ms_.push_back(ms);
+  }
+  void close() { file_.close(); }
+  [[nodiscard]] std::size_t scans() const { return scans_; }
+  [[nodiscard]] std::size_t degenerate() const { return degenerate_; }
+  [[nodiscard]] const std::vector<double>& times_ms() const { return times_ms_; }
+
+ private:
+  io::OutputFile file_;
+  std::size_t scans_{0}, degenerate_{0};
+  std::vector<double> times_ms_;
+};
 
 // One status line on stderr: scans done, rate and, when the total is known, the time left.
 void print_progress(std::size_t done, std::size_t total,
@@ -149,7 +207,16 @@ std::pair<std::int64_t, std::int64_t> column_time_span(const core::OrganizedScan
 // (docs/inputs.md, "Sensor poses and motion compensation").
 class RunInput {
  public:
-  explicit RunInput(const RunOptions& o) {
+  RunInput(const RunOptions& o, bool odometry, bool odometry_deskew) : odometry_(odometry) {
+    open(o);
+    if (!odometry_) return;
+    // The odometry estimates the poses and compensates the motion with its own velocity.
+    deskew_ = false;
+    deskew_off_ = odometry_deskew ? "by the odometry (estimated velocity, from the second scan)"
+                                  : "off (odometry.deskew false)";
+  }
+
+  void open(const RunOptions& o) {
     if (std::filesystem::is_directory(o.input) && !is_rosbag2_folder(o.input) &&
         o.format == "auto") {
       io::SequenceReadOptions read_options;
@@ -210,6 +277,7 @@ class RunInput {
       scan = std::move(item_.scan);
       pose = item_.pose;
       ++scans_;
+      if (odometry_) return true;
       const auto [first_ns, last_ns] = column_time_span(scan);
       if (deskew_ && last_ns > first_ns) {
         // Motion between this scan's stamp and the next one's; the last scan extrapolates the
@@ -227,7 +295,7 @@ class RunInput {
     pose = core::Pose{};
     pose.stamp_ns = scan.stamp_ns;
     ++scans_;
-    if (trajectory_.empty()) return true;
+    if (trajectory_.empty() || odometry_) return true;
     if (!trajectory_.covers(scan.stamp_ns)) {
       throw core::InputError("--poses: no pose around scan " + std::to_string(index) +
                              " at stamp " + std::to_string(scan.stamp_ns) + " ns");
@@ -257,6 +325,16 @@ class RunInput {
   [[nodiscard]] std::string warning() const { return source_ ? source_->warning() : std::string(); }
   /// What the source counted (packets, drops, ...), empty for sequence folders.
   [[nodiscard]] std::string summary() const { return source_ ? source_->summary() : std::string(); }
+  /// Where the poses came from, for the summary.
+  [[nodiscard]] std::string pose_summary(const RunOptions& o) const {
+    if (odometry_) {
+      return "odometry (--odometry " + o.odometry +
+             (o.odometry == "auto" ? ": a recording without --poses)" : ")");
+    }
+    if (!o.poses.empty()) return o.poses + " (--poses)";
+    if (sequence_ && sequence_->has_poses()) return "the sequence's poses.txt";
+    return "none: static sensor at the origin (--odometry on estimates them)";
+  }
   /// Whether and how the scans were motion-compensated, for the summary.
   [[nodiscard]] std::string deskew_summary() const {
     if (!deskew_) return deskew_off_;
@@ -275,6 +353,7 @@ class RunInput {
            io::is_mcap_bag(path);
   }
 
+  bool odometry_{false};  // poses come from the odometry, not from the input
   std::unique_ptr<io::SequenceReader> sequence_;
   std::unique_ptr<io::ScanSource> source_;
   io::Trajectory trajectory_;
@@ -324,9 +403,37 @@ void accumulate_raw(const mapping::DynamicObjectFilter& filter, mapping::StaticM
   for (const auto& scan : filter.released()) raw.insert(scan.points, scan.intensities, {});
 }
 
+// The pose of the first scan in the world the odometry should estimate in: a TUM trajectory
+// interpolated at its stamp (e.g. a simulated sequence's ground truth, to compare in its frame).
+core::Pose odometry_start(const std::string& path, std::int64_t stamp_ns) {
+  const io::Trajectory trajectory = io::read_tum(path);
+  if (!trajectory.covers(stamp_ns)) {
+    throw core::InputError("--odometry-start " + path + ": no pose at the first scan's stamp " +
+                           io::format_stamp(stamp_ns) + " s");
+  }
+  return trajectory.at(stamp_ns);
+}
+
+// The odometry's lines of the run summary, and a warning when some poses are unreliable.
+void print_odometry_summary(const OdometryLog& log) {
+  std::printf("odometry         %zu of %zu scans flagged unreliable (too little geometry or not "
+              "registered); ms per scan median %.3f, p95 %.3f\n",
+              log.degenerate(), log.scans(), eval::quantile(log.times_ms(), 0.5),
+              eval::quantile(log.times_ms(), 0.95));
+  if (log.degenerate() > 0) {
+    std::fprintf(stderr,
+                 "ringtrack: warning: odometry: %zu of %zu scans had too little geometry to fix "
+                 "the pose (e.g. ground only): the estimated poses are unreliable there "
+                 "(odometry.csv, column degenerate)\n",
+                 log.degenerate(), log.scans());
+  }
+}
+
 void run(const RunOptions& o) {
-  const core::Config config = o.config.load();
-  RunInput input(o);
+  const bool odometry = use_odometry(o.odometry, o.input, o.format, o.poses);
+  core::Config config = o.config.load();
+  if (odometry && o.no_deskew) config.odometry.deskew = false;
+  RunInput input(o, odometry, config.odometry.deskew);
 
   const fs::path out = o.out;
   std::error_code ec;
@@ -347,6 +454,8 @@ void run(const RunOptions& o) {
   if (o.filtered_scans) filtered = std::make_unique<FilteredScanWriter>(out / "filtered");
   io::TracksCsvWriter tracks(out / "tracks.csv");
   io::TimingCsvWriter timing(out / "timing.csv");
+  std::unique_ptr<OdometryLog> odometry_log;
+  if (odometry) odometry_log = std::make_unique<OdometryLog>(out / "odometry.csv");
   std::vector<double> total_ms;
   std::set<std::uint64_t> track_ids, dynamic_ids;
   const bool progress = !o.quiet && isatty(STDERR_FILENO);
@@ -361,12 +470,22 @@ void run(const RunOptions& o) {
   g_interrupted.store(false);
   const auto previous_handler = std::signal(SIGINT, on_interrupt);
   while (!g_interrupted.load() && input.next(index, scan, pose)) {
-    if (!pipeline) pipeline = std::make_unique<pipeline::Pipeline>(config, input.sensor_model());
-    const auto& result = pipeline->process(scan, pose);
+    if (!pipeline) {
+      pipeline = std::make_unique<pipeline::Pipeline>(config, input.sensor_model());
+      if (odometry && !o.odometry_start.empty()) {
+        pipeline->set_odometry_start(odometry_start(o.odometry_start, scan.stamp_ns));
+      }
+    }
+    const auto& result =
+        odometry ? pipeline->process_with_odometry(scan) : pipeline->process(scan, pose);
     if (result.skipped) {  // counted by the pipeline; the run goes on
       std::fprintf(stderr, "ringtrack: warning: %s: scan %zu: %s\n", o.input.c_str(), index,
                    result.skip_reason.c_str());
       continue;
+    }
+    if (odometry) {
+      pose = result.pose;
+      odometry_log->write(index, pipeline->odometry_result(), result.times.odometry_ms);
     }
     poses.push_back(pose);
     if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
@@ -378,7 +497,7 @@ void run(const RunOptions& o) {
       if (h.ever_dynamic) dynamic_ids.insert(h.id);
     }
     tracks.write(rows);
-    timing.write(timing_row(index, scan.stamp_ns, result.times));
+    timing.write(timing_row(index, scan.stamp_ns, result.times, odometry));
     total_ms.push_back(result.times.total_ms);
     if (mcap) mcap->write_frame(scan, pose, result, pipeline->static_map());
     if (filtered) {
@@ -398,6 +517,7 @@ void run(const RunOptions& o) {
   if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
   tracks.close();
   timing.close();
+  if (odometry_log) odometry_log->close();
 
   const std::size_t map_voxels = write_map_ply(out / "static_map.ply", pipeline->static_map());
   io::write_tum(out / "poses.txt", poses);
@@ -417,14 +537,17 @@ void run(const RunOptions& o) {
                      " more skipped: stamps older than the scan before)")
                         .c_str(),
               g_interrupted.load() ? " (interrupted: the outputs cover these scans only)" : "");
+  std::printf("poses            %s\n", input.pose_summary(o).c_str());
+  if (odometry_log) print_odometry_summary(*odometry_log);
   std::printf("deskew           %s\n", input.deskew_summary().c_str());
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
   std::printf("static map       %zu voxels\n", map_voxels);
   std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", eval::quantile(total_ms, 0.5),
               eval::quantile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
   std::printf(
-      "outputs          %s/{tracks.csv,timing.csv,static_map.ply,poses.txt,config.yaml%s%s%s}\n",
-      o.out.c_str(), raw_map ? ",raw_map.ply" : "", plotted ? ",maps.png" : "",
+      "outputs          %s/{tracks.csv,timing.csv,static_map.ply,poses.txt,config.yaml%s%s%s%s}\n",
+      o.out.c_str(), odometry ? ",odometry.csv" : "", raw_map ? ",raw_map.ply" : "",
+      plotted ? ",maps.png" : "",
       o.filtered_scans ? ",filtered/" : "");
   if (mcap) {
     std::printf("mcap             %s (%llu messages, %u chunks, %.1f MB)\n", o.mcap.c_str(),
@@ -470,6 +593,17 @@ void register_run(CLI::App& app) {
   cmd->add_flag("--no-deskew", o->no_deskew,
                 "do not motion-compensate the scans (by default they are whenever poses give the "
                 "sensor's motion, docs/inputs.md)");
+  cmd->add_option("--odometry", o->odometry,
+                  "estimate the sensor poses from the scans (docs/odometry.md): on; off (poses "
+                  "from --poses or the sequence, else a static sensor); auto: on for a recording "
+                  "(pcap, bag, udp) without --poses")
+      ->check(CLI::IsMember({"auto", "on", "off"}))
+      ->capture_default_str();
+  cmd->add_option("--odometry-start", o->odometry_start,
+                  "TUM trajectory whose pose at the first scan's stamp places the odometry's "
+                  "world frame (default: the first scan's frame), e.g. a simulated sequence's "
+                  "poses.txt to compare estimates with its ground truth")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--mcap", o->mcap,
                   "also write an MCAP file for Foxglove: scans with labels, detections, tracks, "
                   "poses, static map, metadata (docs/visualisation.md)");

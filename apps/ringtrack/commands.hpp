@@ -24,6 +24,7 @@ void register_dump_config(CLI::App& app);
 void register_demo(CLI::App& app);
 void register_run(CLI::App& app);
 void register_eval(CLI::App& app);
+void register_eval_trajectory(CLI::App& app);
 void register_simulate(CLI::App& app);
 void register_convert(CLI::App& app);
 void register_benchmark(CLI::App& app);

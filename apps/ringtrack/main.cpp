@@ -16,6 +16,7 @@ int main(int argc, char** argv) {
   ringtrack::cli::register_demo(app);
   ringtrack::cli::register_run(app);
   ringtrack::cli::register_eval(app);
+  ringtrack::cli::register_eval_trajectory(app);
   ringtrack::cli::register_simulate(app);
   ringtrack::cli::register_convert(app);
   ringtrack::cli::register_benchmark(app);

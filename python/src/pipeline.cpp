@@ -127,6 +127,7 @@ void bind_frame(py::module_& m) {
                                d["detection"] = f.times.detection_ms;
                                d["tracking"] = f.times.tracking_ms;
                                d["mapping"] = f.times.mapping_ms;
+                               d["odometry"] = f.times.odometry_ms;
                                d["total"] = f.times.total_ms;
                                return d;
                              })
@@ -158,6 +159,46 @@ void bind_pipeline(py::module_& m) {
           },
           py::arg("scan"), py::arg("pose") = core::Pose(),
           "Processes one scan taken at pose (sensor in world) and returns its Frame.")
+      .def(
+          "process_with_odometry",
+          [](pipeline::Pipeline& p, core::OrganizedScan& scan) {
+            if (scan.rings() != p.sensor_model().rings() ||
+                scan.columns() != p.sensor_model().columns()) {
+              throw core::InputError("scan of " + std::to_string(scan.rings()) + " x " +
+                                     std::to_string(scan.columns()) +
+                                     " cells; the pipeline's sensor has " +
+                                     std::to_string(p.sensor_model().rings()) + " x " +
+                                     std::to_string(p.sensor_model().columns()));
+            }
+            py::gil_scoped_release release;
+            return snapshot(p.process_with_odometry(scan), scan);
+          },
+          py::arg("scan"),
+          "Processes a scan without a pose: the LiDAR odometry estimates it (docs/odometry.md) "
+          "and motion-compensates the scan in place; odometry_result tells the pose and how "
+          "reliable it is. Do not mix with process() on one pipeline.")
+      .def("set_odometry_start", &pipeline::Pipeline::set_odometry_start, py::arg("pose"),
+           "The first scan's pose in the world the odometry reports in (default identity); call "
+           "before the first process_with_odometry().")
+      .def_property_readonly(
+          "odometry_result",
+          [](const pipeline::Pipeline& p) {
+            const odometry::OdometryResult& r = p.odometry_result();
+            py::dict d;
+            d["pose"] = r.pose;
+            d["first"] = r.first;
+            d["registered"] = r.registered;
+            d["degenerate"] = r.degenerate;
+            d["weakest_share"] = r.weakest_share;
+            d["iterations"] = r.iterations;
+            d["source_points"] = r.source_points;
+            d["correspondences"] = r.correspondences;
+            d["excluded_points"] = r.excluded_points;
+            d["threshold_m"] = r.threshold_m;
+            return d;
+          },
+          "The odometry's account of the last scan: pose (world_T_sensor), registered, "
+          "degenerate (unreliable), ...")
       .def("finish", &pipeline::Pipeline::finish, py::call_guard<py::gil_scoped_release>(),
            "Moves the scans the filter still holds into the static map.")
       .def_property_readonly("skipped_scans", &pipeline::Pipeline::skipped_scans)

@@ -126,9 +126,11 @@ double filtered_spread(const fs::path& seq, const fs::path& run) {
   return s.rms_m;
 }
 
+// The summary line that starts with key (paths in other lines may contain the word).
 std::string summary_line(const std::string& out, const std::string& key) {
-  const auto at = out.find(key);
+  std::size_t at = out.rfind(key + " ", 0) == 0 ? 0 : out.find("\n" + key + " ");
   if (at == std::string::npos) return {};
+  if (out[at] == '\n') ++at;
   return out.substr(at, out.find('\n', at) - at);
 }
 
@@ -334,14 +336,42 @@ TEST(RunDeskewRecording, TrajectoryEndingInsideTheLastScanIsOneLineError) {
   fs::remove_all(dir);
 }
 
-TEST(RunDeskewRecording, WithoutPosesNothingIsDeskewed) {
+TEST(RunDeskewRecording, WithoutPosesAndOdometryOffNothingIsDeskewed) {
   const fs::path dir = testing::make_temp_dir("ringtrack-run-deskew-none-");
+  const Capture capture = write_capture(dir);
+  const auto r = run_command(kCli + " run " + capture.pcap + " --odometry off --quiet --out " +
+                             (dir / "out").string());
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(summary_line(r.out, "deskew"), "deskew           off (no --poses: static sensor)")
+      << r.out;
+  EXPECT_EQ(summary_line(r.out, "poses"),
+            "poses            none: static sensor at the origin (--odometry on estimates them)")
+      << r.out;
+  fs::remove_all(dir);
+}
+
+// A recording without --poses: the odometry estimates them (--odometry auto) and says so.
+TEST(RunDeskewRecording, WithoutPosesTheOdometryEstimatesThem) {
+  const fs::path dir = testing::make_temp_dir("ringtrack-run-odometry-auto-");
   const Capture capture = write_capture(dir);
   const auto r =
       run_command(kCli + " run " + capture.pcap + " --quiet --out " + (dir / "out").string());
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(summary_line(r.out, "deskew"), "deskew           off (no --poses: static sensor)")
+  EXPECT_EQ(summary_line(r.out, "poses"),
+            "poses            odometry (--odometry auto: a recording without --poses)")
       << r.out;
+  EXPECT_EQ(summary_line(r.out, "deskew"),
+            "deskew           by the odometry (estimated velocity, from the second scan)")
+      << r.out;
+  EXPECT_TRUE(fs::exists(dir / "out" / "odometry.csv"));
+  write_straight_line(dir / "line.txt", capture.scans.front().stamp_ns - 1'000'000'000,
+                     capture.scans.back().column_stamp_ns.back() + 1'000'000'000, {1, 0, 0});
+  const auto both = run_command(kCli + " run " + capture.pcap + " --odometry on --poses " +
+                                (dir / "line.txt").string() + " --quiet --out " +
+                                (dir / "o2").string());
+  EXPECT_NE(both.exit_code, 0);
+  EXPECT_NE(both.err.find("--odometry on and --poses exclude each other"), std::string::npos)
+      << both.err;
   fs::remove_all(dir);
 }
 

@@ -56,7 +56,9 @@ TEST(RunRobustnessCli, ScanWhoseStampGoesBackIsSkippedWithAWarningNamingInputAnd
   }
   test::write_rosbag2(bag, {{"/points", "sensor_msgs/msg/PointCloud2"}}, messages);
   const std::string out = dir + "/out";
-  const auto r = run_command(kCli + " run " + bag.string() + " --out " + out);
+  // A static sensor (--odometry off): the odometry would add its own warning about these
+  // featureless clouds, and the skip is the same with it (Pipeline::process_with_odometry).
+  const auto r = run_command(kCli + " run " + bag.string() + " --odometry off --out " + out);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err, "ringtrack: warning: " + bag.string() +
                        ": scan 2: stamp 1700000001050000000 ns is 0.050000000 s older than the "

@@ -395,6 +395,54 @@ class Schema {
            "it rests");
     number("static_turn_deg", b.static_turn_deg, 0.0, 180.0,
            "... and within this rotation of that pose (degrees)");
+    build_odometry(c.odometry);
+  }
+
+  void build_odometry(OdometryConfig& o) {
+    section_ = "odometry";
+    number("voxel_size_m", o.voxel_size_m, 0.05, 20.0,
+           "local-map voxel edge (m); correspondences are searched within half a voxel (one "
+           "voxel until the first velocity is known), so this also caps the correspondence "
+           "distance (outdoors about max range / 100, indoors smaller)");
+    integer("max_points_per_voxel", o.max_points_per_voxel, 1, 1000,
+            "points a map voxel keeps at most: bounds memory and the nearest-neighbour search");
+    number("map_spacing_m", o.map_spacing_m, 0.01, 20.0,
+           "scan points enter the local map at most one per cube of this edge (m)");
+    number("source_voxel_m", o.source_voxel_m, 0.01, 20.0,
+           "registration uses at most one scan point per cube of this edge (m): fewer points, "
+           "faster ICP");
+    number("map_radius_m", o.map_radius_m, 1.0, 10000.0,
+           "map voxels farther than this from the sensor are dropped (m): bounded memory");
+    number("min_range_m", o.min_range_m, 0.0, 1000.0,
+           "nearer returns (the platform, the person carrying the sensor) are not used (m)");
+    number("max_range_m", o.max_range_m, 0.1, 10000.0, "farther returns are not used (m)");
+    number("initial_threshold_m", o.initial_threshold_m, 0.01, 100.0,
+           "correspondence distance until the motion statistics exist (m)");
+    number("min_motion_m", o.min_motion_m, 0.0, 100.0,
+           "a scan whose prediction error (translation plus rotation times max range) is below "
+           "this does not enter the adaptive threshold's statistics (m)");
+    number("min_threshold_m", o.min_threshold_m, 0.0, 100.0,
+           "floor of the adaptive correspondence distance (m)");
+    integer("max_iterations", o.max_iterations, 1, 1000, "ICP iterations per scan at most");
+    number("convergence_m", o.convergence_m, 1e-9, 1.0,
+           "ICP stops when a step moves less than this (m, and rad for the rotation)");
+    choice("residual", o.residual,
+           {{"point_to_plane", OdometryResidual::kPointToPlane},
+            {"point_to_point", OdometryResidual::kPointToPoint}},
+           "what ICP minimises: the distance to the nearest map point (point_to_point, as "
+           "KISS-ICP) or its component along the scan point's surface normal (point_to_plane: "
+           "the rings a sparse sensor draws on the ground then cannot pull the estimate back to "
+           "the previous pose; points without a normal are left out)");
+    boolean("deskew", o.deskew,
+            "motion-compensate each scan with the estimated velocity, per column time");
+    boolean("exclude_tracks", o.exclude_tracks,
+            "points inside the boxes of the previous scan's reported tracks, predicted to this "
+            "scan, stay out of registration and the local map (walkers do not drag the estimate)");
+    number("exclude_margin_m", o.exclude_margin_m, 0.0, 10.0,
+           "those boxes grow by this on every side (m)");
+    number("degeneracy_threshold", o.degeneracy_threshold, 0.0, 1.0,
+           "a scan is flagged unreliable when the weakest translation direction holds less than "
+           "this share of the squared surface normals (ground only: about 0)");
   }
 
   std::string section_;
@@ -509,6 +557,10 @@ void validate_config(const Config& c) {
   const auto& t = c.tracking;
   if (!(t.min_speed_kmh < t.max_speed_kmh)) {
     throw ConfigError("key 'tracking.min_speed_kmh' must be below 'tracking.max_speed_kmh'");
+  }
+  const auto& o = c.odometry;
+  if (!(o.min_range_m < o.max_range_m)) {
+    throw ConfigError("key 'odometry.min_range_m' must be below 'odometry.max_range_m'");
   }
 }
 

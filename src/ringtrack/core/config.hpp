@@ -166,6 +166,38 @@ struct BackgroundRangeConfig {
   double static_turn_deg{0.1};
 };
 
+/// What ICP minimises per correspondence (docs/odometry.md, "Residual").
+enum class OdometryResidual {
+  kPointToPoint,  ///< distance to the nearest map point (KISS-ICP's choice)
+  kPointToPlane,  ///< ... along the scan point's surface normal from the grid (the default)
+};
+
+/// LiDAR odometry (docs/odometry.md): the sensor's pose per scan from the scans alone when no
+/// pose source is given. Scan-to-local-map point-to-point ICP with a robust kernel, constant-
+/// velocity prediction and per-column motion compensation.
+struct OdometryConfig {
+  double voxel_size_m{1.0};           // local-map voxel edge; the nearest-neighbour search spans
+                                      // one voxel, so this bounds the correspondence distance
+  int max_points_per_voxel{20};       // points kept per map voxel (bounded memory and search)
+  double map_spacing_m{0.5};          // scan points enter the map at most one per cube this size
+  double source_voxel_m{2.0};         // registration uses at most one scan point per cube this size
+  double map_radius_m{100.0};         // map voxels farther than this from the sensor are dropped
+  double min_range_m{1.0};            // nearer returns (the platform, the operator) are not used
+  double max_range_m{100.0};          // farther returns are not used
+  double initial_threshold_m{2.0};    // correspondence distance before motion statistics exist
+  double min_motion_m{0.1};           // prediction errors below this do not enter the statistics
+  double min_threshold_m{0.3};        // floor of the adaptive correspondence distance
+  int max_iterations{30};             // ICP iterations per scan at most
+  double convergence_m{1e-3};         // ICP stops when a step moves less than this (m and rad)
+  OdometryResidual residual{OdometryResidual::kPointToPlane};  // point_to_plane: a sparse scan's
+                                      // ground rings do not pull the estimate back to the last pose
+  bool deskew{true};                  // motion-compensate each scan with the estimated velocity
+  bool exclude_tracks{true};          // points of tracked objects stay out of ICP and the map
+  double exclude_margin_m{0.3};       // ... inside their predicted boxes grown by this
+  double degeneracy_threshold{0.01};  // a scan whose weakest translation direction gets less than
+                                      // this share of the surface normals is flagged unreliable
+};
+
 /// Every setting of the pipeline.
 struct Config {
   SegmentationConfig segmentation;
@@ -173,6 +205,7 @@ struct Config {
   TrackingConfig tracking;
   MappingConfig mapping;
   BackgroundRangeConfig background;
+  OdometryConfig odometry;
 };
 
 /// Documentation of one key, as dump-config prints it.

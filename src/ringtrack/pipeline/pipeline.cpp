@@ -95,6 +95,44 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   result_.retroactive_points = filtered.retroactive_points;
   result_.times = {elapsed_ms(t0, t1), elapsed_ms(t1, t2), elapsed_ms(t2, t3), elapsed_ms(t3, t4),
                    elapsed_ms(t0, t4)};
+  result_.pose = pose;
+  return result_;
+}
+
+void Pipeline::predicted_track_boxes(std::int64_t stamp_ns) {
+  excluded_boxes_.clear();
+  if (!config_.odometry.exclude_tracks) return;
+  const double dt_s =
+      tracker_.stamp_ns() == 0 ? 0.0 : 1e-9 * static_cast<double>(stamp_ns - tracker_.stamp_ns());
+  const auto margin = Eigen::Vector3f::Constant(static_cast<float>(config_.odometry.exclude_margin_m));
+  for (const auto& h : tracker_.hypotheses()) {
+    if (!h.reported || h.box.empty()) continue;
+    const Eigen::Vector3f shift = (dt_s * h.filter.velocity()).cast<float>();
+    core::Box3 box;
+    box.min = h.box.min + shift - margin;
+    box.max = h.box.max + shift + margin;
+    excluded_boxes_.push_back(box);
+  }
+}
+
+const FrameResult& Pipeline::process_with_odometry(core::OrganizedScan& scan) {
+  if (tracker_.stamp_ns() != 0 && scan.stamp_ns < tracker_.stamp_ns()) {
+    return skip(scan, older_than_previous(scan.stamp_ns, tracker_.stamp_ns()));
+  }
+  if (odometry_ && odometry_->scans() > 0 && scan.stamp_ns == tracker_.stamp_ns()) {
+    return skip(scan, "stamp " + std::to_string(scan.stamp_ns) +
+                          " ns repeats the previous scan's: the odometry needs time to pass; skipped");
+  }
+  if (!odometry_) {
+    odometry_ = std::make_unique<odometry::Odometry>(config_.odometry, odometry_start_.isometry());
+  }
+  const auto t0 = Clock::now();
+  predicted_track_boxes(scan.stamp_ns);
+  odometry_result_ = odometry_->process(scan, excluded_boxes_);
+  const double odometry_ms = elapsed_ms(t0, Clock::now());
+  process(scan, odometry_result_.pose);
+  result_.times.odometry_ms = odometry_ms;
+  result_.times.total_ms += odometry_ms;
   return result_;
 }
 

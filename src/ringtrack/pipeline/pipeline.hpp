@@ -2,6 +2,7 @@
 /// The whole per-scan pipeline: segmentation, detection, tracking, dynamic-object filter.
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -15,6 +16,7 @@
 #include "ringtrack/detection/completion.hpp"
 #include "ringtrack/detection/detector.hpp"
 #include "ringtrack/mapping/dynamic_object_filter.hpp"
+#include "ringtrack/odometry/odometry.hpp"
 #include "ringtrack/segmentation/segmenter.hpp"
 #include "ringtrack/tracking/tracker.hpp"
 
@@ -26,7 +28,8 @@ struct StageTimes {
   double detection_ms{0};
   double tracking_ms{0};
   double mapping_ms{0};
-  double total_ms{0};
+  double total_ms{0};     ///< every stage, odometry included
+  double odometry_ms{0};  ///< pose estimation and motion compensation (0 when poses are given)
 };
 
 /// What one scan produced. The spans point into the pipeline's buffers and stay valid until the
@@ -39,6 +42,7 @@ struct FrameResult {
   std::span<const std::uint32_t> removed_cells;      ///< cells removed as dynamic from this scan
   std::size_t retroactive_points{0};                 ///< removed from earlier scans in the log
   StageTimes times;
+  core::Pose pose;  ///< the sensor pose the scan was processed with (given or estimated)
   /// The scan was not processed (its stamp is older than the previous scan's: a host clock step
   /// or a corrupt stamp); the spans are empty and skip_reason says why.
   bool skipped{false};
@@ -55,6 +59,18 @@ class Pipeline {
   /// processed one is skipped, not processed (the tracker's filters cannot run backwards): the
   /// result says so and why, and skipped_scans() counts it; later scans continue the tracks.
   const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& pose);
+  /// Processes a scan of a sensor without a pose source: the odometry (config.odometry) estimates
+  /// its pose and motion-compensates the scan in place, leaving out the points of the objects
+  /// tracked so far (predicted to this scan), and the scan is then processed with that pose.
+  /// odometry_result() tells how reliable the pose is. Do not mix with process() on one pipeline.
+  const FrameResult& process_with_odometry(core::OrganizedScan& scan);
+  /// Where the odometry's world frame is: the pose of the first scan given to
+  /// process_with_odometry() (default: identity, the world is that scan's frame). Call first.
+  void set_odometry_start(const core::Pose& first_scan_pose) { odometry_start_ = first_scan_pose; }
+  /// The odometry's account of the last scan given to process_with_odometry().
+  [[nodiscard]] const odometry::OdometryResult& odometry_result() const { return odometry_result_; }
+  /// The odometry (nullptr before the first process_with_odometry()).
+  [[nodiscard]] const odometry::Odometry* odometry() const { return odometry_.get(); }
   /// Scans skipped so far because their stamp was older than the previous scan's.
   [[nodiscard]] std::uint64_t skipped_scans() const { return skipped_scans_; }
   /// Moves the scans still held back by the dynamic-object filter into the static map.
@@ -75,6 +91,8 @@ class Pipeline {
   const FrameResult& skip(const core::OrganizedScan& scan, std::string reason);
   /// Forgets the background when the sensor left its resting pose; true while it rests there.
   bool track_rest(const core::Pose& pose);
+  /// World boxes of the reported tracks predicted to stamp_ns and grown by the exclusion margin.
+  void predicted_track_boxes(std::int64_t stamp_ns);
 
   core::Config config_;
   core::SensorModel model_;
@@ -88,6 +106,10 @@ class Pipeline {
   std::vector<std::uint8_t> labels_;
   FrameResult result_;
   std::uint64_t skipped_scans_{0};
+  std::unique_ptr<odometry::Odometry> odometry_;
+  odometry::OdometryResult odometry_result_;
+  core::Pose odometry_start_;
+  std::vector<core::Box3> excluded_boxes_;
 };
 
 }  // namespace ringtrack::pipeline

@@ -1,0 +1,367 @@
+#include "ringtrack/odometry/odometry.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/odometry/registration.hpp"
+
+namespace ringtrack::odometry {
+namespace {
+
+// Fewer pairs than this cannot be told from a chance alignment: the pose stays predicted.
+constexpr std::size_t kMinCorrespondences = 20;
+// Horizontal tangents of the grid normals span at least this (m): noise of a few centimetres
+// between neighbouring columns would otherwise tilt the normals of the ground.
+constexpr float kTangentSpanM = 0.4F;
+constexpr int kMaxTangentColumns = 30;
+// A second registration after compensating again pays off when the compensation moved points
+// at kLeverM range by more than this over the revolution (m): on turning MAVs, not on cars.
+constexpr double kSecondPassShiftM = 0.02;
+constexpr double kLeverM = 20.0;
+// Iterations of the first registration when more follow the compensation, and passes at most.
+constexpr int kFirstPassIterations = 6;
+constexpr int kMaxPasses = 3;
+// The first scans enter the map at once: it is too sparse yet to wait for the next pose.
+constexpr std::size_t kEarlyScans = 5;
+
+bool usable(const core::OrganizedScan& scan, std::size_t i) {
+  if (!scan.valid(i)) return false;
+  return std::isfinite(scan.xs()[i]) && std::isfinite(scan.ys()[i]) && std::isfinite(scan.zs()[i]);
+}
+
+bool inside_any(const Eigen::Vector3f& p, std::span<const core::Box3> boxes) {
+  return std::any_of(boxes.begin(), boxes.end(), [&](const auto& b) { return b.contains(p); });
+}
+
+// Unit surface normal at a cell from its neighbours on the grid (same ring some columns apart,
+// the next ring in the same column); false at edges, gaps and depth jumps.
+bool grid_normal(const core::OrganizedScan& scan, std::size_t cell, Eigen::Vector3f& normal) {
+  const int ring = scan.ring_of(cell), column = scan.column_of(cell), columns = scan.columns();
+  const float range = scan.range_m(cell);
+  const float step = range * 2.0F * std::numbers::pi_v<float> / static_cast<float>(columns);
+  const int k = std::clamp(static_cast<int>(std::ceil(kTangentSpanM / std::max(step, 1e-6F))), 1,
+                           kMaxTangentColumns);
+  const auto near_cell = [&](int r, int c, std::size_t& out) {
+    if (r < 0 || r >= scan.rings()) return false;
+    out = scan.index(r, ((c % columns) + columns) % columns);
+    return usable(scan, out) && std::abs(scan.range_m(out) - range) < 0.3F * range;
+  };
+  std::size_t a = 0, b = 0, up = 0;
+  if (!near_cell(ring, column - k, a) || !near_cell(ring, column + k, b)) return false;
+  if (!near_cell(ring + 1, column, up) && !near_cell(ring - 1, column, up)) return false;
+  const Eigen::Vector3f along = scan.point(b) - scan.point(a);
+  const Eigen::Vector3f across = scan.point(up) - scan.point(cell);
+  normal = along.cross(across);
+  const float norm = normal.norm();
+  if (!(norm > 1e-9F)) return false;
+  normal /= norm;
+  return true;
+}
+
+}  // namespace
+
+Eigen::Isometry3d scale_motion(const Eigen::Isometry3d& motion, double s) {
+  const Eigen::AngleAxisd aa(motion.linear());
+  Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+  out.linear() = Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix();
+  out.translation() = s * motion.translation();
+  return out;
+}
+
+void deskew_constant_velocity(core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
+                              double motion_duration_s) {
+  const int columns = scan.columns();
+  if (!(motion_duration_s > 0) || scan.column_stamp_ns.size() != static_cast<std::size_t>(columns))
+    return;
+  const Eigen::AngleAxisd aa(motion.linear());
+  for (int c = 0; c < columns; ++c) {
+    const std::int64_t t = scan.column_stamp_ns[static_cast<std::size_t>(c)];
+    if (t == scan.stamp_ns) continue;
+    const double s = 1e-9 * static_cast<double>(t - scan.stamp_ns) / motion_duration_s;
+    const Eigen::Matrix3f rotation =
+        Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix().cast<float>();
+    const Eigen::Vector3f translation = (s * motion.translation()).cast<float>();
+    for (int r = 0; r < scan.rings(); ++r) {
+      const std::size_t i = scan.index(r, c);
+      if (!scan.valid(i)) continue;
+      scan.set_return(r, c, scan.range_m(i), scan.intensity(i),
+                      rotation * scan.point(i) + translation);
+    }
+  }
+}
+
+Odometry::Odometry(const core::OdometryConfig& config, const Eigen::Isometry3d& start)
+    : config_(config), start_(start), map_(config.voxel_size_m, config.max_points_per_voxel) {
+  if (!(config.min_range_m < config.max_range_m)) {
+    throw core::ConfigError("odometry.min_range_m must be below odometry.max_range_m");
+  }
+}
+
+Eigen::Isometry3d Odometry::predict(double dt_s) const {
+  if (!(motion_dt_s_ > 0)) return last_pose_;
+  return last_pose_ * scale_motion(motion_, dt_s / motion_dt_s_);
+}
+
+double Odometry::correspondence_threshold() const {
+  // Until a velocity is known the prediction may be off by a whole scan's motion: search the
+  // 27 voxels around each point. Afterwards three standard deviations of the past prediction
+  // errors, within the 2x2x2 block (half a voxel) that keeps the search cheap.
+  if (!(motion_dt_s_ > 0)) return config_.voxel_size_m;
+  const double sigma = error_samples_ == 0
+                           ? config_.initial_threshold_m
+                           : std::sqrt(error_sse_ / static_cast<double>(error_samples_));
+  return std::clamp(3.0 * sigma, std::min(config_.min_threshold_m, 0.5 * config_.voxel_size_m),
+                    0.5 * config_.voxel_size_m);
+}
+
+void Odometry::update_threshold(const Eigen::Isometry3d& predicted,
+                                const Eigen::Isometry3d& estimated) {
+  // How far the prediction was off, as the largest displacement of a point at max range.
+  const Eigen::Isometry3d deviation = predicted.inverse() * estimated;
+  const double angle = Eigen::AngleAxisd(deviation.linear()).angle();
+  const double error =
+      2.0 * config_.max_range_m * std::sin(0.5 * angle) + deviation.translation().norm();
+  if (error > config_.min_motion_m) {
+    error_sse_ += error * error;
+    ++error_samples_;
+  }
+}
+
+void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isometry3d& predicted,
+                             std::span<const core::Box3> excluded, OdometryResult& result) {
+  frame_.clear();
+  frame_time_s_.clear();
+  source_.clear();
+  source_time_s_.clear();
+  source_cells_.clear();
+  const bool timed = scan.column_stamp_ns.size() == static_cast<std::size_t>(scan.columns());
+  frame_keys_.clear(scan.size() / 4);
+  source_keys_.clear(scan.size() / 16);
+  const auto inv_frame = static_cast<float>(1.0 / config_.map_spacing_m);
+  const auto inv_source = static_cast<float>(1.0 / config_.source_voxel_m);
+  const Eigen::Isometry3f to_world = predicted.cast<float>();
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!usable(scan, i)) continue;
+    const float range = scan.range_m(i);
+    if (range < config_.min_range_m || range > config_.max_range_m) continue;
+    const Eigen::Vector3f p = scan.point(i);
+    // The source grid is coarser: a point new to it is new to the finer frame grid too when the
+    // edges divide (the defaults), and nearly always otherwise.
+    if (!frame_keys_.insert(voxel_key(p, inv_frame))) continue;
+    if (!excluded.empty() && inside_any(to_world * p, excluded)) {
+      ++result.excluded_points;
+      continue;
+    }
+    frame_.push_back(p);
+    frame_time_s_.push_back(
+        timed ? static_cast<float>(1e-9 * static_cast<double>(
+                                              scan.column_stamp_ns[scan.column_of(i)] - scan.stamp_ns))
+              : 0.0F);
+    if (source_keys_.insert(voxel_key(p, inv_source))) {
+      source_.push_back(p);
+      source_time_s_.push_back(frame_time_s_.back());
+      source_cells_.push_back(static_cast<std::uint32_t>(i));
+    }
+  }
+  result.source_points = source_.size();
+}
+
+void Odometry::compute_normals(const core::OrganizedScan& scan) {
+  source_normals_.assign(source_cells_.size(), Eigen::Vector3f::Zero());
+  valid_normals_.clear();
+  for (std::size_t k = 0; k < source_cells_.size(); ++k) {
+    if (grid_normal(scan, source_cells_[k], source_normals_[k])) {
+      valid_normals_.push_back(source_normals_[k]);
+    } else {
+      source_normals_[k].setZero();
+    }
+  }
+}
+
+void Odometry::insert_pending(const Eigen::Isometry3d& actual, double actual_dt_s) {
+  if (pending_.empty()) return;
+  if (config_.deskew && actual_dt_s > 0) {
+    // The pending scan was compensated with the motion known when it was registered; now that
+    // the next pose is known, its true motion over its own revolution is: correct to first order
+    // (the difference is a fraction of a degree and centimetres).
+    const Eigen::Isometry3d used = pending_used_dt_s_ > 0
+                                       ? scale_motion(pending_used_, actual_dt_s / pending_used_dt_s_)
+                                       : Eigen::Isometry3d::Identity();
+    const Eigen::Isometry3d correction = actual * used.inverse();
+    const Eigen::AngleAxisd aa(correction.linear());
+    const Eigen::Vector3f w = (aa.angle() * aa.axis() / actual_dt_s).cast<float>();
+    const Eigen::Vector3f v = (correction.translation() / actual_dt_s).cast<float>();
+    for (std::size_t k = 0; k < pending_.size(); ++k) {
+      pending_[k] += pending_time_s_[k] * (w.cross(pending_[k]) + v);
+    }
+  }
+  const Eigen::Isometry3f to_world = pending_pose_.cast<float>();
+  for (auto& p : pending_) p = to_world * p;
+  map_.insert(pending_);
+  pending_.clear();
+}
+
+void Odometry::commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, double dt_s) {
+  if (scans_ > 0) {
+    motion_ = last_pose_.inverse() * pose;
+    motion_dt_s_ = 1e-9 * static_cast<double>(stamp_ns - last_stamp_ns_);
+  }
+  insert_pending(motion_, motion_dt_s_);
+  last_pose_ = pose;
+  last_stamp_ns_ = stamp_ns;
+  ++scans_;
+  // This scan enters the map once the next one has been registered (see insert_pending), unless
+  // the map is empty or young: the next scan needs enough to register against.
+  if (scans_ == 1 && config_.deskew) {  // kept until the first velocity is known
+    first_frame_ = frame_;
+    first_time_s_ = frame_time_s_;
+  }
+  pending_.swap(frame_);
+  pending_time_s_.swap(frame_time_s_);
+  pending_pose_ = pose;
+  pending_used_ = applied_;
+  pending_used_dt_s_ = dt_s;
+  if (map_.voxel_count() == 0 || scans_ <= kEarlyScans) {
+    insert_pending(Eigen::Isometry3d::Identity(), 0.0);
+  }
+  const Eigen::Vector3f here = pose.translation().cast<float>();
+  // Cropping walks every voxel: only after the sensor moved a twentieth of the radius.
+  if ((here - last_crop_).norm() > 0.05 * config_.map_radius_m) {
+    map_.crop(here, config_.map_radius_m);
+    last_crop_ = here;
+  }
+}
+
+bool Odometry::register_scan(const Eigen::Isometry3d& predicted, int max_iterations,
+                             OdometryResult& result, Eigen::Isometry3d& estimate) {
+  IcpSettings settings;
+  settings.max_distance_m = correspondence_threshold();
+  settings.kernel_scale_m = settings.max_distance_m / 3.0;
+  settings.max_iterations = max_iterations;
+  settings.convergence = config_.convergence_m;
+  settings.point_to_plane = config_.residual == core::OdometryResidual::kPointToPlane;
+  const IcpResult icp = register_points(source_, map_, predicted, settings, source_normals_);
+  result.iterations += icp.iterations;
+  result.correspondences = icp.correspondences;
+  result.threshold_m = settings.max_distance_m;
+  result.registered = icp.correspondences >= kMinCorrespondences;
+  if (result.registered) estimate = icp.world_T_sensor;
+  return icp.converged;
+}
+
+double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate) const {
+  const Eigen::Isometry3d change = (last_pose_.inverse() * estimate) * applied_.inverse();
+  return change.translation().norm() +
+         kLeverM * Eigen::AngleAxisd(change.linear()).angle();
+}
+
+void Odometry::refine_deskew(const Eigen::Isometry3d& estimate, double dt_s) {
+  // The motion the scan was compensated with (over this scan's interval) and the one its
+  // estimate implies; the difference is applied on top.
+  const Eigen::Isometry3d implied = last_pose_.inverse() * estimate;
+  const Eigen::Isometry3d correction = implied * applied_.inverse();
+  applied_ = implied;
+  // The selected points, to first order (the correction is small): cheaper than compensating
+  // the whole scan again and selecting them anew (the scan itself is compensated once, after the
+  // last pass).
+  const Eigen::AngleAxisd aa(correction.linear());
+  const Eigen::Vector3f w = (aa.angle() * aa.axis() / dt_s).cast<float>();
+  const Eigen::Vector3f v = (correction.translation() / dt_s).cast<float>();
+  for (std::size_t k = 0; k < frame_.size(); ++k) {
+    frame_[k] += frame_time_s_[k] * (w.cross(frame_[k]) + v);
+  }
+  for (std::size_t k = 0; k < source_.size(); ++k) {
+    source_[k] += source_time_s_[k] * (w.cross(source_[k]) + v);
+  }
+  if (scans_ == 1 && !first_frame_.empty()) restart_map(implied, dt_s);
+}
+
+void Odometry::refine_passes(core::OrganizedScan& scan, double dt_s, bool converged,
+                             OdometryResult& result, Eigen::Isometry3d& estimate) {
+  // Compensated with the motion its estimate implies, the scan is registered again from there
+  // while that moves the points noticeably: the velocity of the scan before lags too much on a
+  // turning MAV or a shaking hand.
+  const Eigen::Isometry3d scan_applied = applied_;
+  for (int pass = 0; pass < kMaxPasses; ++pass) {
+    const bool changed = deskew_correction_m(estimate) > kSecondPassShiftM;
+    refine_deskew(estimate, dt_s);
+    if (!changed && converged) break;
+    OdometryResult again = result;
+    again.iterations = 0;
+    Eigen::Isometry3d refined = estimate;
+    converged = register_scan(estimate, config_.max_iterations, again, refined);
+    if (!again.registered) break;
+    estimate = refined;
+    result.iterations += again.iterations;
+    result.correspondences = again.correspondences;
+  }
+  deskew_constant_velocity(scan, applied_ * scan_applied.inverse(), dt_s);
+}
+
+void Odometry::restart_map(const Eigen::Isometry3d& first_motion, double dt_s) {
+  // The first scan entered the map uncompensated (no velocity was known then): rebuild the map
+  // from it compensated with the motion now known, so that the second pass, and every scan after,
+  // registers against a consistent start (else its skew stays in the map as a tilt).
+  map_.clear();
+  const Eigen::AngleAxisd aa(first_motion.linear());
+  const Eigen::Vector3f w = (aa.angle() * aa.axis() / dt_s).cast<float>();
+  const Eigen::Vector3f v = (first_motion.translation() / dt_s).cast<float>();
+  const Eigen::Isometry3f to_world = last_pose_.cast<float>();
+  for (std::size_t k = 0; k < first_frame_.size(); ++k) {
+    const Eigen::Vector3f& p = first_frame_[k];
+    first_frame_[k] = to_world * (p + first_time_s_[k] * (w.cross(p) + v));
+  }
+  map_.insert(first_frame_);
+  first_frame_.clear();
+  first_frame_.shrink_to_fit();
+}
+
+OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core::Box3> excluded) {
+  if (scans_ > 0 && scan.stamp_ns <= last_stamp_ns_) {
+    throw core::InputError("odometry: scan stamp " + std::to_string(scan.stamp_ns) +
+                           " ns is not later than the previous scan's " +
+                           std::to_string(last_stamp_ns_) + " ns");
+  }
+  OdometryResult result;
+  const double dt_s =
+      scans_ == 0 ? 0.0 : 1e-9 * static_cast<double>(scan.stamp_ns - last_stamp_ns_);
+  const Eigen::Isometry3d predicted = scans_ == 0 ? start_ : predict(dt_s);
+  applied_ = Eigen::Isometry3d::Identity();
+  if (config_.deskew && motion_dt_s_ > 0) {
+    deskew_constant_velocity(scan, motion_, motion_dt_s_);
+    applied_ = scale_motion(motion_, dt_s / motion_dt_s_);
+  }
+  select_points(scan, predicted, excluded, result);
+  compute_normals(scan);
+  Eigen::Isometry3d estimate = predicted;
+  bool converged = true;
+  result.first = scans_ == 0;
+  if (map_.voxel_count() == 0) {
+    // The first scan (or the first with points) starts the map where the sensor is predicted.
+    result.registered = !source_.empty();
+  } else if (!source_.empty()) {
+    // With compensation the first pass only needs to get near: a second one follows.
+    converged = register_scan(predicted, config_.deskew ? kFirstPassIterations : config_.max_iterations,
+                              result, estimate);
+  }
+  result.weakest_share = weakest_translation_share(valid_normals_);
+  result.degenerate = !result.registered || result.weakest_share < config_.degeneracy_threshold;
+  const bool refine = result.registered && config_.deskew && scans_ > 0;
+  if (refine) refine_passes(scan, dt_s, converged, result, estimate);
+  if (result.registered && scans_ > 0) update_threshold(predicted, estimate);
+  // A scan that did not register keeps its prediction but adds nothing to the map.
+  if (!result.registered) frame_.clear();
+  commit(estimate, scan.stamp_ns, dt_s);
+  // Where the scene does not fix the motion (a plain), the velocity learned from it would be
+  // extrapolated scan after scan and run away: assume the sensor stops until geometry returns.
+  if (result.degenerate) motion_ = Eigen::Isometry3d::Identity();
+  result.pose.stamp_ns = scan.stamp_ns;
+  result.pose.translation = estimate.translation();
+  result.pose.rotation = Eigen::Quaterniond(estimate.linear()).normalized();
+  return result;
+}
+
+}  // namespace ringtrack::odometry

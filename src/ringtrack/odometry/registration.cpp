@@ -1,0 +1,154 @@
+#include "ringtrack/odometry/registration.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <array>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace ringtrack::odometry {
+namespace {
+
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+
+// Candidate voxels of each source point, looked up again only when the point's search block
+// changes: after the first iterations the pose moves by millimetres and the hash is not touched.
+struct CandidateCache {
+  std::vector<VoxelKey> block;
+  std::vector<std::array<const VoxelMap::Voxel*, 27>> voxels;
+  std::vector<int> count;
+
+  explicit CandidateCache(std::size_t n) : block(n, ~VoxelKey{0}), voxels(n), count(n, 0) {}
+};
+
+// Nearest map point among the cached candidate voxels of point i; false when none is close enough.
+bool nearest_cached(const VoxelMap& map, CandidateCache& cache, std::size_t i,
+                    const Eigen::Vector3f& q, double max_distance_m, Eigen::Vector3f& out) {
+  const VoxelKey key = map.block_key(q, max_distance_m);
+  if (key != cache.block[i]) {
+    cache.block[i] = key;
+    cache.count[i] = map.candidates(q, max_distance_m, cache.voxels[i]);
+  }
+  float best = static_cast<float>(max_distance_m * max_distance_m);
+  bool found = false;
+  for (int k = 0; k < cache.count[i]; ++k) {
+    const VoxelMap::Voxel& voxel = *cache.voxels[i][static_cast<std::size_t>(k)];
+    if (map.cube_distance2(voxel, q) > best) continue;
+    for (const auto& m : voxel.points) {
+      const float d2 = (m - q).squaredNorm();
+      if (d2 <= best) {
+        best = d2;
+        out = m;
+        found = true;
+      }
+    }
+  }
+  return found;
+}
+
+// Adds one weighted correspondence to the normal equations. The rotation's lever arm is taken from
+// the sensor position (not the world origin) so that the system stays well conditioned far away.
+void accumulate(const Eigen::Vector3d& lever, const Eigen::Vector3d& residual, double w,
+                Matrix6d& h, Vector6d& g) {
+  Eigen::Matrix<double, 3, 6> j;
+  j.leftCols<3>().setIdentity();
+  j.rightCols<3>() << 0, lever.z(), -lever.y(), -lever.z(), 0, lever.x(), lever.y(), -lever.x(), 0;
+  h.noalias() += w * j.transpose() * j;
+  g.noalias() += w * j.transpose() * residual;
+}
+
+// The same for a residual along the normal n (1 x 6 Jacobian [n, lever x n]).
+void accumulate_plane(const Eigen::Vector3d& lever, const Eigen::Vector3d& n, double residual,
+                      double w, Matrix6d& h, Vector6d& g) {
+  Vector6d j;
+  j.head<3>() = n;
+  j.tail<3>() = lever.cross(n);
+  h.noalias() += w * j * j.transpose();
+  g.noalias() += (w * residual) * j;
+}
+
+}  // namespace
+
+double geman_mcclure_weight(double residual_m, double scale_m) {
+  const double s2 = scale_m * scale_m;
+  const double d = s2 + residual_m * residual_m;
+  return s2 * s2 / (d * d);
+}
+
+Eigen::Matrix3d rotation_from_vector(const Eigen::Vector3d& w) {
+  const double angle = w.norm();
+  if (angle < 1e-12) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(angle, w / angle).toRotationMatrix();
+}
+
+IcpResult register_points(const std::vector<Eigen::Vector3f>& sensor_points, const VoxelMap& map,
+                          const Eigen::Isometry3d& initial, const IcpSettings& settings,
+                          const std::vector<Eigen::Vector3f>& normals) {
+  const bool plane = settings.point_to_plane && normals.size() == sensor_points.size();
+  IcpResult result;
+  result.world_T_sensor = initial;
+  CandidateCache cache(sensor_points.size());
+  Eigen::Vector3f nearest = Eigen::Vector3f::Zero();
+  Vector6d previous = Vector6d::Zero();
+  for (int it = 0; it < settings.max_iterations; ++it) {
+    const Eigen::Matrix3d rotation = result.world_T_sensor.linear();
+    const Eigen::Vector3d origin = result.world_T_sensor.translation();
+    Matrix6d h = Matrix6d::Zero();
+    Vector6d g = Vector6d::Zero();
+    std::size_t pairs = 0;
+    for (std::size_t i = 0; i < sensor_points.size(); ++i) {
+      if (plane && normals[i].isZero()) continue;
+      const Eigen::Vector3d lever = rotation * sensor_points[i].cast<double>();
+      const Eigen::Vector3d q = lever + origin;
+      if (!nearest_cached(map, cache, i, q.cast<float>(), settings.max_distance_m, nearest)) {
+        continue;
+      }
+      const Eigen::Vector3d residual = q - nearest.cast<double>();
+      if (plane) {
+        const Eigen::Vector3d n = rotation * normals[i].cast<double>();
+        const double e = n.dot(residual);
+        accumulate_plane(lever, n, e, geman_mcclure_weight(e, settings.kernel_scale_m), h, g);
+      } else {
+        accumulate(lever, residual, geman_mcclure_weight(residual.norm(), settings.kernel_scale_m),
+                   h, g);
+      }
+      ++pairs;
+    }
+    result.iterations = it + 1;
+    result.correspondences = pairs;
+    if (pairs < 6) break;  // too few pairs to fix six degrees of freedom
+    // Damping of 1 % of each block's mean curvature: a direction the scene does not constrain
+    // (along a plain, along a corridor) keeps its prediction instead of taking a step driven by
+    // noise; constrained directions only converge a little slower (same solution).
+    const double damp_t = 0.01 * h.topLeftCorner<3, 3>().trace() / 3.0 + 1e-9;
+    const double damp_r = 0.01 * h.bottomRightCorner<3, 3>().trace() / 3.0 + 1e-9;
+    h.diagonal() += (Vector6d() << damp_t, damp_t, damp_t, damp_r, damp_r, damp_r).finished();
+    const Vector6d step = h.ldlt().solve(-g);
+    if (!step.allFinite()) break;
+    result.world_T_sensor.linear() = rotation_from_vector(step.tail<3>()) * rotation;
+    result.world_T_sensor.translation() = origin + step.head<3>();
+    previous = step;
+    // Converged; or nearly, and bouncing between two sets of nearest neighbours.
+    if (step.norm() < settings.convergence ||
+        (step.norm() < 10.0 * settings.convergence && step.dot(previous) < 0)) {
+      result.converged = true;
+      break;
+    }
+  }
+  return result;
+}
+
+double weakest_translation_share(const std::vector<Eigen::Vector3f>& normals) {
+  if (normals.empty()) return 0.0;
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const auto& n : normals) scatter.noalias() += (n.cast<double>() * n.cast<double>().transpose());
+  scatter /= static_cast<double>(normals.size());
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
+  solver.computeDirect(scatter, Eigen::EigenvaluesOnly);
+  return std::max(0.0, solver.eigenvalues()(0));
+}
+
+}  // namespace ringtrack::odometry

@@ -1,0 +1,100 @@
+#pragma once
+/// Voxel hashing for the odometry: a flat set of voxel keys (downsampling) and the local map
+/// (a bounded number of points per voxel, cropped around the sensor).
+
+#include <Eigen/Core>
+#include <array>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+namespace ringtrack::odometry {
+
+/// Integer voxel coordinates packed into 63 bits (21 bits per axis, +-2^20 voxels).
+using VoxelKey = std::uint64_t;
+
+/// Key of the voxel of edge voxel_size_m holding p.
+[[nodiscard]] VoxelKey voxel_key(const Eigen::Vector3f& p, float inv_voxel_size);
+/// Key of integer voxel coordinates.
+[[nodiscard]] VoxelKey pack_voxel(int x, int y, int z);
+
+/// Open-addressing set of voxel keys, reused across scans without reallocating (clear() keeps the
+/// table): the voxel downsampling of a scan costs tens of nanoseconds per point.
+class VoxelKeySet {
+ public:
+  /// Empties the set and makes room for at least n keys at load <= 1/2.
+  void clear(std::size_t n);
+  /// Inserts the key; true when it was not in the set. The table doubles past load 1/2.
+  bool insert(VoxelKey key);
+  /// Number of keys.
+  [[nodiscard]] std::size_t size() const { return size_; }
+
+ private:
+  void grow();
+
+  static constexpr VoxelKey kEmpty = ~VoxelKey{0};
+  std::vector<VoxelKey> slots_;
+  std::size_t mask_{0};
+  std::size_t size_{0};
+};
+
+/// The local map: world-frame points in voxels of edge voxel_size_m, at most max_points each.
+class VoxelMap {
+ public:
+  /// Points of one voxel, in insertion order, and the voxel's lowest corner.
+  struct Voxel {
+    Eigen::Vector3f corner{Eigen::Vector3f::Zero()};
+    std::vector<Eigen::Vector3f> points;
+  };
+  /// Squared distance from p to the voxel's cube (0 inside): a search skips voxels no nearer
+  /// than the best point found so far.
+  [[nodiscard]] float cube_distance2(const Voxel& v, const Eigen::Vector3f& p) const {
+    const Eigen::Vector3f d = (v.corner - p).cwiseMax(p - v.corner - edge_).cwiseMax(0.0F);
+    return d.squaredNorm();
+  }
+
+  VoxelMap(double voxel_size_m, int max_points_per_voxel);
+
+  /// Adds world-frame points; a full voxel ignores further points (the first ones stay).
+  void insert(const std::vector<Eigen::Vector3f>& points);
+  /// Drops every voxel whose first point lies farther than radius_m from center.
+  void crop(const Eigen::Vector3f& center, double radius_m);
+  /// Removes every point.
+  void clear() { voxels_.clear(); }
+
+  /// The voxels to search for the neighbour of p within max_distance_m (<= voxel size): the 2x2x2
+  /// block around p when max_distance_m <= half a voxel, else the 3x3x3 block. Returns how many
+  /// it wrote to out (only voxels that exist).
+  int candidates(const Eigen::Vector3f& p, double max_distance_m,
+                 std::array<const Voxel*, 27>& out) const;
+  /// Key of the block candidates() searches for p (equal keys: equal candidate voxels).
+  [[nodiscard]] VoxelKey block_key(const Eigen::Vector3f& p, double max_distance_m) const;
+  /// Nearest map point to p within max_distance_m; false when none.
+  bool nearest(const Eigen::Vector3f& p, double max_distance_m, Eigen::Vector3f& out) const;
+
+  [[nodiscard]] double voxel_size_m() const { return voxel_size_m_; }
+  [[nodiscard]] std::size_t voxel_count() const { return voxels_.size(); }
+  /// Number of points in the map.
+  [[nodiscard]] std::size_t point_count() const;
+  /// Every map point (tests, visualisation).
+  [[nodiscard]] std::vector<Eigen::Vector3f> points() const;
+
+ private:
+  struct KeyHash {
+    std::size_t operator()(VoxelKey k) const {
+      k ^= k >> 33U;  // splitmix-style finaliser: neighbouring voxels land far apart
+      k *= 0xff51afd7ed558ccdULL;
+      k ^= k >> 33U;
+      return static_cast<std::size_t>(k);
+    }
+  };
+  const Voxel* find(int x, int y, int z) const;
+
+  double voxel_size_m_;
+  float inv_voxel_size_;
+  Eigen::Vector3f edge_;
+  std::size_t max_points_;
+  std::unordered_map<VoxelKey, Voxel, KeyHash> voxels_;
+};
+
+}  // namespace ringtrack::odometry

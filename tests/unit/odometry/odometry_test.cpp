@@ -1,0 +1,398 @@
+// LiDAR odometry against oracles: known rigid motions, exact per-column shifts, a sensor that
+// stands still, a degenerate scene, and bad input (docs/odometry.md).
+
+#include "ringtrack/odometry/odometry.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <random>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/odometry/registration.hpp"
+#include "ringtrack/odometry/voxel_map.hpp"
+#include "ringtrack/sim/scenario_file.hpp"
+#include "ringtrack/sim/simple_scene.hpp"
+#include "ringtrack/sim/simulator.hpp"
+
+namespace ringtrack {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+// A built-in scenario with no actors and an exact sensor, standing still at a scripted pose.
+sim::Scenario still_scenario(const std::string& name, const Eigen::Vector3d& xyz,
+                             const Eigen::Vector3d& rpy_deg, double noise_m = 0.0) {
+  sim::Scenario s = sim::builtin_scenario(name);
+  s.people = 0;
+  s.robots = 0;
+  s.drones = 0;
+  s.distractors.clear();
+  s.duration_s = 1.0;
+  s.sensor.range_noise_m = noise_m;
+  s.sensor.dropout_probability = 0.0;
+  s.sensor.far_dropout_probability = 0.0;
+  s.sensor.motion = sim::SensorMotion::kScripted;
+  s.sensor.keyframes = {{0.0, xyz, rpy_deg}};
+  return s;
+}
+
+sim::SimulatedScan simulate_at(const std::string& name, const Eigen::Vector3d& xyz,
+                               const Eigen::Vector3d& rpy_deg, double noise_m = 0.0,
+                               std::uint64_t seed = 1) {
+  sim::Simulator simulator(still_scenario(name, xyz, rpy_deg, noise_m), seed);
+  return simulator.next();
+}
+
+Eigen::Isometry3d isometry(const core::Pose& p) {
+  return p.isometry();
+}
+
+double angle_deg(const Eigen::Matrix3d& r) {
+  return Eigen::AngleAxisd(r).angle() / kDeg;
+}
+
+std::vector<Eigen::Vector3f> valid_points(const core::OrganizedScan& scan) {
+  std::vector<Eigen::Vector3f> out;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (scan.valid(i)) out.push_back(scan.point(i));
+  }
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Voxel map: the neighbour search against a brute-force reference.
+
+TEST(VoxelMap, NearestMatchesBruteForceWithinHalfAVoxel) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> u(-5.0F, 5.0F);
+  std::vector<Eigen::Vector3f> points(3000);
+  for (auto& p : points) p = {u(rng), u(rng), u(rng)};
+  odometry::VoxelMap map(1.0, 1000);
+  map.insert(points);
+  ASSERT_EQ(map.point_count(), points.size());
+  for (int k = 0; k < 500; ++k) {
+    const Eigen::Vector3f q{u(rng), u(rng), u(rng)};
+    for (double radius : {0.3, 0.5, 0.9}) {
+      float best = std::numeric_limits<float>::infinity();
+      for (const auto& p : points) best = std::min(best, (p - q).norm());
+      Eigen::Vector3f found;
+      const bool ok = map.nearest(q, radius, found);
+      EXPECT_EQ(ok, best <= radius) << "radius " << radius;
+      if (ok) {
+        EXPECT_FLOAT_EQ((found - q).norm(), best);
+      }
+    }
+  }
+}
+
+TEST(VoxelMap, KeepsAtMostMaxPointsPerVoxelAndCropsFarVoxels) {
+  odometry::VoxelMap map(1.0, 3);
+  std::vector<Eigen::Vector3f> points;
+  for (int k = 0; k < 10; ++k) points.emplace_back(0.1F * static_cast<float>(k) * 0.5F, 0.5F, 0.5F);
+  points.emplace_back(50.5F, 0.5F, 0.5F);
+  map.insert(points);
+  EXPECT_EQ(map.voxel_count(), 2U);
+  EXPECT_EQ(map.point_count(), 4U);
+  map.crop(Eigen::Vector3f::Zero(), 10.0);
+  EXPECT_EQ(map.voxel_count(), 1U);
+  EXPECT_EQ(map.point_count(), 3U);
+}
+
+TEST(VoxelKeySet, InsertsEachKeyOnce) {
+  odometry::VoxelKeySet set;
+  set.clear(10);
+  EXPECT_TRUE(set.insert(odometry::pack_voxel(1, 2, 3)));
+  EXPECT_FALSE(set.insert(odometry::pack_voxel(1, 2, 3)));
+  EXPECT_TRUE(set.insert(odometry::pack_voxel(-1, 2, 3)));
+  for (int k = 0; k < 100; ++k) set.insert(odometry::pack_voxel(k, -k, 0));  // grows past 10
+  EXPECT_FALSE(set.insert(odometry::pack_voxel(99, -99, 0)));
+  set.clear(10);
+  EXPECT_TRUE(set.insert(odometry::pack_voxel(1, 2, 3)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Registration.
+
+TEST(Registration, GemanMcClureWeightIsOneAtZeroAndAQuarterAtTheScale) {
+  EXPECT_DOUBLE_EQ(odometry::geman_mcclure_weight(0.0, 0.2), 1.0);
+  EXPECT_DOUBLE_EQ(odometry::geman_mcclure_weight(0.2, 0.2), 0.25);
+  EXPECT_LT(odometry::geman_mcclure_weight(2.0, 0.2), 1e-3);
+}
+
+TEST(Registration, WeakestTranslationShareOfAPlaneIsZeroOfABoxAThird) {
+  std::vector<Eigen::Vector3f> plane(10, Eigen::Vector3f::UnitZ());
+  EXPECT_NEAR(odometry::weakest_translation_share(plane), 0.0, 1e-12);
+  std::vector<Eigen::Vector3f> box = {Eigen::Vector3f::UnitX(), Eigen::Vector3f::UnitY(),
+                                      Eigen::Vector3f::UnitZ()};
+  EXPECT_NEAR(odometry::weakest_translation_share(box), 1.0 / 3.0, 1e-9);
+  EXPECT_EQ(odometry::weakest_translation_share({}), 0.0);
+}
+
+// The same points moved by a known rigid motion: ICP must undo it exactly.
+TEST(Registration, RecoversKnownRigidMotionsOfTheSamePoints) {
+  const auto scan = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
+  const auto points = valid_points(scan.scan);
+  odometry::VoxelMap map(1.0, 200);
+  map.insert(points);
+  std::vector<Eigen::Vector3f> source;
+  for (std::size_t k = 0; k < points.size(); k += 7) source.push_back(points[k]);
+  struct Motion {
+    Eigen::Vector3d t;
+    Eigen::Vector3d rpy_deg;
+  };
+  for (const Motion& m : {Motion{{0.3, -0.2, 0.05}, {0, 0, 0}}, Motion{{0, 0, 0}, {0, 0, 4}},
+                          Motion{{-0.25, 0.3, 0.1}, {1.5, -1, 3}}}) {
+    Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+    truth.linear() = (Eigen::AngleAxisd(m.rpy_deg.z() * kDeg, Eigen::Vector3d::UnitZ()) *
+                      Eigen::AngleAxisd(m.rpy_deg.y() * kDeg, Eigen::Vector3d::UnitY()) *
+                      Eigen::AngleAxisd(m.rpy_deg.x() * kDeg, Eigen::Vector3d::UnitX()))
+                         .toRotationMatrix();
+    truth.translation() = m.t;
+    // Sensor points seen from pose `truth` of the same world points.
+    std::vector<Eigen::Vector3f> moved;
+    for (const auto& p : source) moved.push_back((truth.inverse() * p.cast<double>()).cast<float>());
+    odometry::IcpSettings settings;
+    settings.max_distance_m = 1.0;
+    settings.kernel_scale_m = 0.5;
+    settings.max_iterations = 100;
+    settings.convergence = 1e-7;
+    const auto result =
+        odometry::register_points(moved, map, Eigen::Isometry3d::Identity(), settings);
+    const Eigen::Isometry3d error = truth.inverse() * result.world_T_sensor;
+    EXPECT_LT(error.translation().norm(), 1e-3) << m.t.transpose();
+    EXPECT_LT(angle_deg(error.linear()), 0.01) << m.rpy_deg.transpose();
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Deskew with a known velocity against exact per-column shifts.
+
+TEST(OdometryDeskew, UndoesExactPerColumnMotion) {
+  const auto model = core::SensorModel::vlp16();
+  sim::RenderedScan rendered = sim::render(model, sim::SimpleScene::demo());
+  core::OrganizedScan& scan = rendered.scan;
+  scan.set_uniform_columns(model, 1'000'000'000);
+  const core::OrganizedScan reference = scan;
+  // The sensor moves by `motion` every 0.1 s: the column at time t measured its points in the
+  // frame scale(motion, t / 0.1 s), i.e. p_column = scale^-1 * p_reference.
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = Eigen::AngleAxisd(6 * kDeg, Eigen::Vector3d(0.1, 0.2, 1).normalized())
+                        .toRotationMatrix();
+  motion.translation() = Eigen::Vector3d(0.8, -0.3, 0.05);
+  for (int c = 0; c < scan.columns(); ++c) {
+    const double s = 1e-9 * static_cast<double>(scan.column_stamp_ns[c] - scan.stamp_ns) / 0.1;
+    const Eigen::Isometry3f to_column = odometry::scale_motion(motion, s).inverse().cast<float>();
+    for (int r = 0; r < scan.rings(); ++r) {
+      const std::size_t i = scan.index(r, c);
+      if (scan.valid(i)) scan.set_return(r, c, scan.range_m(i), 1.0F, to_column * scan.point(i));
+    }
+  }
+  odometry::deskew_constant_velocity(scan, motion, 0.1);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!scan.valid(i)) continue;
+    worst = std::max(worst, static_cast<double>((scan.point(i) - reference.point(i)).norm()));
+  }
+  EXPECT_LT(worst, 1e-4);
+}
+
+TEST(OdometryDeskew, ScaleMotionHalvesAngleAndTranslation) {
+  Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
+  motion.linear() = Eigen::AngleAxisd(0.4, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  motion.translation() = Eigen::Vector3d(2, 0, 0);
+  const auto half = odometry::scale_motion(motion, 0.5);
+  EXPECT_NEAR(Eigen::AngleAxisd(half.linear()).angle(), 0.2, 1e-12);
+  EXPECT_NEAR((half.translation() - Eigen::Vector3d(1, 0, 0)).norm(), 0.0, 1e-12);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The odometry on simulated scans.
+
+core::OdometryConfig test_config() {
+  core::OdometryConfig c;
+  c.deskew = false;  // the scans below are taken by a still sensor
+  return c;
+}
+
+struct TwoScanCase {
+  Eigen::Vector3d xyz;
+  Eigen::Vector3d rpy_deg;
+};
+
+// Different poses sample the world at different points: point-to-point ICP against a map of
+// one scan recovers the motion within centimetres (the map's point spacing limits it).
+TEST(Odometry, RecoversTheMotionBetweenTwoScansOfAStructuredScene) {
+  for (const auto& c : {TwoScanCase{{0.5, 0.2, 2.5}, {0, 0, 3}}, TwoScanCase{{0.0, 0.0, 2.5}, {0, 0, 0}},
+                        TwoScanCase{{-0.4, 0.6, 2.6}, {1, -1, -2}}}) {
+    auto a = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
+    auto b = simulate_at("4", c.xyz, c.rpy_deg);
+    b.scan.stamp_ns = a.scan.stamp_ns + 100'000'000;
+    odometry::Odometry odo(test_config());
+    const auto first = odo.process(a.scan);
+    EXPECT_TRUE(first.first);
+    const auto second = odo.process(b.scan);
+    EXPECT_TRUE(second.registered);
+    EXPECT_FALSE(second.degenerate) << second.weakest_share;
+    const Eigen::Isometry3d truth = isometry(a.pose).inverse() * isometry(b.pose);
+    const Eigen::Isometry3d error = truth.inverse() * isometry(second.pose);
+    EXPECT_LT(error.translation().norm(), 0.02)
+        << c.xyz.transpose() << " iterations " << second.iterations << " pairs "
+        << second.correspondences << " of " << second.source_points << " threshold "
+        << second.threshold_m;
+    EXPECT_LT(angle_deg(error.linear()), 0.1) << c.rpy_deg.transpose();
+  }
+}
+
+TEST(Odometry, HalfTheColumnsMissingStillRegisters) {
+  auto a = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
+  auto b = simulate_at("4", {0.4, -0.3, 2.5}, {0, 0, 2});
+  b.scan.stamp_ns = a.scan.stamp_ns + 100'000'000;
+  for (int r = 0; r < b.scan.rings(); ++r) {
+    for (int col = b.scan.columns() / 2; col < b.scan.columns(); ++col) {
+      b.scan.set_invalid(r, col, core::ReturnStatus::kNoReturn);
+    }
+  }
+  odometry::Odometry odo(test_config());
+  odo.process(a.scan);
+  const auto second = odo.process(b.scan);
+  ASSERT_TRUE(second.registered);
+  const Eigen::Isometry3d truth = isometry(a.pose).inverse() * isometry(b.pose);
+  const Eigen::Isometry3d error = truth.inverse() * isometry(second.pose);
+  EXPECT_LT(error.translation().norm(), 0.03);
+  EXPECT_LT(angle_deg(error.linear()), 0.15);
+}
+
+// 1000 scans of a still sensor with range noise: the estimate must not wander.
+TEST(Odometry, StillSensorStaysStillOverAThousandScans) {
+  std::vector<core::OrganizedScan> scans;
+  for (std::uint64_t seed = 1; seed <= 8; ++seed) {
+    scans.push_back(simulate_at("4", {0, 0, 2.5}, {0, 0, 0}, 0.03, seed).scan);
+  }
+  core::OdometryConfig config;  // defaults, deskew on: a still sensor's velocity must stay ~0
+  odometry::Odometry odo(config);
+  double worst_m = 0.0, worst_deg = 0.0;
+  for (int k = 0; k < 1000; ++k) {
+    core::OrganizedScan scan = scans[static_cast<std::size_t>(k) % scans.size()];
+    const std::int64_t offset = scan.stamp_ns;
+    scan.stamp_ns = static_cast<std::int64_t>(k) * 100'000'000;
+    for (auto& t : scan.column_stamp_ns) t += scan.stamp_ns - offset;
+    const auto r = odo.process(scan);
+    worst_m = std::max(worst_m, r.pose.translation.norm());
+    worst_deg = std::max(worst_deg, angle_deg(r.pose.rotation.toRotationMatrix()));
+  }
+  EXPECT_LT(worst_m, 0.01);
+  EXPECT_LT(worst_deg, 0.05);
+}
+
+TEST(Odometry, GroundOnlySceneIsFlaggedDegenerateAStructuredOneIsNot) {
+  auto field = simulate_at("1", {0, 0, 2.5}, {0, 0, 0}, 0.03);
+  auto field2 = simulate_at("1", {1, 0, 2.5}, {0, 0, 0}, 0.03, 2);
+  field2.scan.stamp_ns = field.scan.stamp_ns + 100'000'000;
+  odometry::Odometry odo(test_config());
+  EXPECT_TRUE(odo.process(field.scan).degenerate);
+  const auto r = odo.process(field2.scan);
+  EXPECT_TRUE(r.degenerate) << r.weakest_share;
+
+  auto town = simulate_at("4", {0, 0, 2.5}, {0, 0, 0}, 0.03);
+  auto town2 = simulate_at("4", {1, 0, 2.5}, {0, 0, 0}, 0.03, 2);
+  town2.scan.stamp_ns = town.scan.stamp_ns + 100'000'000;
+  odometry::Odometry structured(test_config());
+  structured.process(town.scan);
+  const auto s = structured.process(town2.scan);
+  EXPECT_FALSE(s.degenerate) << s.weakest_share;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bad input.
+
+TEST(Odometry, NonFinitePointsAreIgnored) {
+  auto a = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
+  auto b = simulate_at("4", {0.3, 0, 2.5}, {0, 0, 1});
+  b.scan.stamp_ns = a.scan.stamp_ns + 100'000'000;
+  core::OrganizedScan poisoned = b.scan;
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (int col = 0; col < poisoned.columns(); col += 3) {
+    poisoned.set_return(5, col, 10.0F, 1.0F, Eigen::Vector3f(nan, 1.0F, 0.0F));
+  }
+  odometry::Odometry clean(test_config()), dirty(test_config());
+  core::OrganizedScan a2 = a.scan;
+  clean.process(a.scan);
+  dirty.process(a2);
+  const auto rc = clean.process(b.scan);
+  const auto rd = dirty.process(poisoned);
+  ASSERT_TRUE(rd.registered);
+  EXPECT_TRUE(rd.pose.translation.allFinite());
+  EXPECT_LT((rd.pose.translation - rc.pose.translation).norm(), 0.02);
+}
+
+TEST(Odometry, EmptyScanKeepsThePredictionAndIsFlagged) {
+  auto a = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
+  odometry::Odometry odo(test_config());
+  odo.process(a.scan);
+  core::OrganizedScan empty(a.scan.rings(), a.scan.columns());
+  empty.stamp_ns = a.scan.stamp_ns + 100'000'000;
+  const auto r = odo.process(empty);
+  EXPECT_FALSE(r.registered);
+  EXPECT_TRUE(r.degenerate);
+  EXPECT_EQ(r.source_points, 0U);
+  EXPECT_LT(r.pose.translation.norm(), 1e-9);
+  const std::size_t map_points = odo.local_map().point_count();
+  // A later real scan registers again.
+  auto b = simulate_at("4", {0.2, 0, 2.5}, {0, 0, 0});
+  b.scan.stamp_ns = empty.stamp_ns + 100'000'000;
+  const auto rb = odo.process(b.scan);
+  EXPECT_TRUE(rb.registered);
+  // A scan enters the map once the next one is registered (its motion is known then).
+  auto c = simulate_at("4", {0.4, 0, 2.5}, {0, 0, 0});
+  c.scan.stamp_ns = b.scan.stamp_ns + 100'000'000;
+  EXPECT_TRUE(odo.process(c.scan).registered);
+  EXPECT_GT(odo.local_map().point_count(), map_points);
+}
+
+TEST(Odometry, StampNotLaterThanThePreviousOneThrows) {
+  auto a = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
+  odometry::Odometry odo(test_config());
+  core::OrganizedScan copy = a.scan;
+  odo.process(a.scan);
+  EXPECT_THROW(odo.process(copy), core::InputError);
+}
+
+TEST(Odometry, ExcludedBoxesKeepTheirPointsOut) {
+  auto a = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
+  core::Box3 everything;
+  everything.extend(Eigen::Vector3f::Constant(-1000.0F));
+  everything.extend(Eigen::Vector3f::Constant(1000.0F));
+  odometry::Odometry odo(test_config());
+  const std::vector<core::Box3> boxes{everything};
+  const auto r = odo.process(a.scan, boxes);
+  EXPECT_EQ(r.source_points, 0U);
+  EXPECT_GT(r.excluded_points, 0U);
+  EXPECT_EQ(odo.local_map().point_count(), 0U);
+}
+
+TEST(Odometry, InconsistentRangesAreAConfigError) {
+  core::OdometryConfig c;
+  c.min_range_m = 50.0;
+  c.max_range_m = 10.0;
+  EXPECT_THROW(odometry::Odometry{c}, core::ConfigError);
+}
+
+// The moving-sensor scenarios of docs/odometry.md load, validate (paths clear of every solid)
+// and last 100 s with a scripted sensor.
+TEST(OdometryScenarios, FilesLoadWithAScriptedSensorFor100Seconds) {
+  for (const char* name : {"town-drive", "industrial-walk", "park-climb"}) {
+    const auto s = sim::load_scenario_file(std::string(RINGTRACK_SOURCE_DIR) + "/config/odometry/" +
+                                           name + ".yaml");
+    EXPECT_EQ(s.name, name);
+    EXPECT_EQ(s.duration_s, 100.0) << name;
+    EXPECT_EQ(s.sensor.motion, sim::SensorMotion::kScripted) << name;
+    ASSERT_FALSE(s.sensor.keyframes.empty()) << name;
+    EXPECT_GE(s.sensor.keyframes.back().t_s, 100.0) << name;
+  }
+}
+
+}  // namespace
+}  // namespace ringtrack
