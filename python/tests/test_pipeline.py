@@ -21,7 +21,9 @@ def test_pipeline_tracks_simulated_people():
     assert last.segment_labels.shape == (16, sim.model.columns)
     assert len(last.detections) > 0
     assert any(t.reported and t.dynamic for t in last.tracks)
-    assert set(last.times_ms) == {"segmentation", "detection", "tracking", "mapping", "total"}
+    assert set(last.times_ms) == {"odometry", "segmentation", "detection", "tracking", "mapping",
+                                  "total"}
+    assert last.times_ms["odometry"] == 0.0  # poses given: no odometry
     pipeline.finish()
     assert pipeline.static_map().shape[1] == 3 and pipeline.static_map().shape[0] > 1000
 
