@@ -135,6 +135,15 @@ void bind_frame(py::module_& m) {
       .def_readonly("skip_reason", &Frame::skip_reason);
 }
 
+// A scan of another sensor's size would be read out of bounds by the stages.
+void check_scan_fits(const pipeline::Pipeline& p, const core::OrganizedScan& scan) {
+  const core::SensorModel& model = p.sensor_model();
+  if (scan.rings() == model.rings() && scan.columns() == model.columns()) return;
+  throw core::InputError("scan of " + std::to_string(scan.rings()) + " x " +
+                         std::to_string(scan.columns()) + " cells; the pipeline's sensor has " +
+                         std::to_string(model.rings()) + " x " + std::to_string(model.columns()));
+}
+
 }  // namespace
 
 void bind_pipeline(py::module_& m) {
@@ -146,14 +155,7 @@ void bind_pipeline(py::module_& m) {
       .def(
           "process",
           [](pipeline::Pipeline& p, const core::OrganizedScan& scan, const core::Pose& pose) {
-            if (scan.rings() != p.sensor_model().rings() ||
-                scan.columns() != p.sensor_model().columns()) {
-              throw core::InputError("scan of " + std::to_string(scan.rings()) + " x " +
-                                     std::to_string(scan.columns()) +
-                                     " cells; the pipeline's sensor has " +
-                                     std::to_string(p.sensor_model().rings()) + " x " +
-                                     std::to_string(p.sensor_model().columns()));
-            }
+            check_scan_fits(p, scan);
             py::gil_scoped_release release;
             return snapshot(p.process(scan, pose), scan);
           },
@@ -162,14 +164,7 @@ void bind_pipeline(py::module_& m) {
       .def(
           "process_with_odometry",
           [](pipeline::Pipeline& p, core::OrganizedScan& scan) {
-            if (scan.rings() != p.sensor_model().rings() ||
-                scan.columns() != p.sensor_model().columns()) {
-              throw core::InputError("scan of " + std::to_string(scan.rings()) + " x " +
-                                     std::to_string(scan.columns()) +
-                                     " cells; the pipeline's sensor has " +
-                                     std::to_string(p.sensor_model().rings()) + " x " +
-                                     std::to_string(p.sensor_model().columns()));
-            }
+            check_scan_fits(p, scan);
             py::gil_scoped_release release;
             return snapshot(p.process_with_odometry(scan), scan);
           },
