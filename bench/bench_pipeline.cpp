@@ -1,10 +1,13 @@
 // BM_PipelineScan: the whole pipeline on one simulated VLP-16 scan with 10 people walking in an
 // open field, in time order with the tracker warmed up (the steady state of a long run).
+// BM_PipelineScanMovingPark: the same on the park (trees, bushes, people) seen from the
+// benchmark's moving sensor (figure 8, deskewed): the cluttered moving case of the map stage.
 
 #include <benchmark/benchmark.h>
 
 #include <memory>
 
+#include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 #include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/simulator.hpp"
@@ -16,20 +19,45 @@ using namespace ringtrack;
 constexpr int kScans = 120;
 constexpr int kWarmUp = 20;  // scans before timing: tracks exist, the map log is filling
 
-const std::vector<sim::SimulatedScan>& scans() {
+struct FeedScan {
+  sim::SimulatedScan scan;
+  core::Pose pose;  // deskewed to the scan's first column for a moving sensor
+};
+
+std::vector<FeedScan> simulate(const sim::Scenario& scenario, std::uint64_t seed) {
+  sim::Simulator simulator(scenario, seed);
+  const bool moving = scenario.sensor.motion != sim::SensorMotion::kStatic;
+  std::vector<FeedScan> out(kScans);
+  for (int k = 0; k < kScans; ++k) {
+    simulator.next(out[k].scan);
+    out[k].pose = out[k].scan.pose;
+    if (moving) {
+      out[k].pose = pipeline::deskew_scan(out[k].scan.scan, out[k].scan.pose,
+                                          simulator.sensor_pose_at(simulator.scan_stamp_ns(k + 1)));
+    }
+  }
+  return out;
+}
+
+const std::vector<FeedScan>& open_field_scans() {
   static const auto data = [] {
     auto scenario = sim::builtin_scenario("1");
     scenario.people = 10;
-    sim::Simulator simulator(scenario, 7);
-    std::vector<sim::SimulatedScan> out(kScans);
-    for (auto& s : out) simulator.next(s);
-    return out;
+    return simulate(scenario, 7);
   }();
   return data;
 }
 
-void BM_PipelineScan(benchmark::State& state) {
-  const auto& data = scans();
+const std::vector<FeedScan>& moving_park_scans() {
+  static const auto data = [] {
+    auto scenario = sim::with_moving_sensor(sim::builtin_scenario("6"));
+    return simulate(scenario, 1);
+  }();
+  return data;
+}
+
+void run_pipeline(benchmark::State& state, const std::vector<FeedScan>& data,
+                  const core::Config& config = {}) {
   std::unique_ptr<pipeline::Pipeline> pipeline;
   int next = kScans;
   std::size_t hypotheses = 0;
@@ -37,11 +65,12 @@ void BM_PipelineScan(benchmark::State& state) {
   for (auto _ : state) {
     if (next == kScans) {  // start over with a fresh pipeline, warmed up outside the timing
       state.PauseTiming();
-      pipeline = std::make_unique<pipeline::Pipeline>(core::Config{}, core::SensorModel::vlp16());
-      for (next = 0; next < kWarmUp; ++next) pipeline->process(data[next].scan, data[next].pose);
+      pipeline = std::make_unique<pipeline::Pipeline>(config, core::SensorModel::vlp16());
+      for (next = 0; next < kWarmUp; ++next)
+        pipeline->process(data[next].scan.scan, data[next].pose);
       state.ResumeTiming();
     }
-    const auto& result = pipeline->process(data[next].scan, data[next].pose);
+    const auto& result = pipeline->process(data[next].scan.scan, data[next].pose);
     hypotheses = result.hypotheses.size();
     sum.segmentation_ms += result.times.segmentation_ms;
     sum.detection_ms += result.times.detection_ms;
@@ -59,9 +88,27 @@ void BM_PipelineScan(benchmark::State& state) {
   state.counters["mapping_ms"] = mean(sum.mapping_ms);
 }
 
+void BM_PipelineScan(benchmark::State& state) {
+  run_pipeline(state, open_field_scans());
+}
+
+// Argument: mapping.free_space off (0) or on (1), to price the free-space line.
+void BM_PipelineScanMovingPark(benchmark::State& state) {
+  core::Config config;
+  config.mapping.free_space = state.range(0) != 0;
+  run_pipeline(state, moving_park_scans(), config);
+}
+
 }  // namespace
 
 BENCHMARK(BM_PipelineScan)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(5)
+    ->ReportAggregatesOnly(true);
+BENCHMARK(BM_PipelineScanMovingPark)
+    ->ArgName("free_space")
+    ->Arg(0)
+    ->Arg(1)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);

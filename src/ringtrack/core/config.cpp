@@ -370,6 +370,33 @@ class Schema {
            "(the paper; people who stand all along stay), person = those and every hypothesis "
            "flagged person, confirmed = every confirmed hypothesis, moving or not; an object "
            "removed once is removed from its first scan on");
+    boolean("free_space", m.free_space,
+            "free-space line: a candidate point of a logged scan (a segmented point, or one near "
+            "a hypothesis' box) that a later scan sees through (the beam ends beyond it) leaves "
+            "that scan before it reaches the map; independent of the tracks");
+    number("free_space_margin_m", m.free_space_margin_m, 0.0, 100.0,
+           "free_space: the later beam must end more than this beyond the point (m)");
+    number("free_space_lateral_m", m.free_space_lateral_m, 0.0, 10.0,
+           "free_space: ... and pass this close to the point (m): a beam passing beside thin "
+           "structure says nothing about it");
+    boolean("free_space_moving", m.free_space_moving,
+            "free_space also for a moving sensor, projecting each candidate into the later scan "
+            "(off by default: the projection ignores the sensor's motion during a scan, up to "
+            "half a metre at 5 m/s, and removed about 0.1 % of the static points in the "
+            "benchmark; docs/mapping.md)");
+    number("free_space_clearance_m", m.free_space_clearance_m, 0.0, 10.0,
+           "free_space, a scan from another viewpoint: no beam through the cube of this half "
+           "edge around the point may end in it (the nearest beam may pass beside a thin pole "
+           "and see past it) (m)");
+    integer("free_space_lag_scans", m.free_space_lag_scans, 1, 1000,
+            "free_space: a logged scan's candidates are tested against the scan this many scans "
+            "later, and again against the newest scan when it leaves the log");
+    number("free_space_reach_m", m.free_space_reach_m, 0.0, 10.0,
+           "free_space: points within this of any hypothesis' box are candidates too (heads, "
+           "arms and legs outside the cluster) (m)");
+    integer("free_space_protect_count", m.free_space_protect_count, 1, 1000000,
+            "free_space: a point whose static-map voxel already holds this many points is "
+            "structure seen occupied many times and stays");
 
     auto& b = c.background;
     section_ = "background";

@@ -140,6 +140,16 @@ struct MappingConfig {
   double object_margin_m{0.2};  // a measured dynamic box grows by this sideways and up, and every
                                 // point inside leaves its scan (0: only its detection's cells)
   RemovedObjects remove{RemovedObjects::kDynamic};  // which tracked objects leave the map
+  // Free-space line (docs/mapping.md): a logged candidate point (segmented, or near a
+  // hypothesis) that a later scan sees through leaves the scan before it reaches the map.
+  bool free_space{true};
+  double free_space_margin_m{0.3};     // the beam must end this far beyond the point
+  double free_space_lateral_m{0.05};   // ... and pass this close to it
+  bool free_space_moving{false};       // also test scans from other viewpoints (inexact)
+  double free_space_clearance_m{0.1};  // moving sensor: no beam may end this near the point
+  int free_space_lag_scans{5};         // first test this many scans later; again at release
+  double free_space_reach_m{0.8};      // points this near a hypothesis' box are candidates
+  int free_space_protect_count{10};    // a map voxel of this many points protects its points
 };
 
 /// Background range model of a static sensor (core::BackgroundRangeModel, docs/visibility.md):
@@ -176,21 +186,22 @@ enum class OdometryResidual {
 /// pose source is given. Scan-to-local-map point-to-point ICP with a robust kernel, constant-
 /// velocity prediction and per-column motion compensation.
 struct OdometryConfig {
-  double voxel_size_m{1.0};           // local-map voxel edge; the nearest-neighbour search spans
-                                      // one voxel, so this bounds the correspondence distance
-  int max_points_per_voxel{20};       // points kept per map voxel (bounded memory and search)
-  double map_spacing_m{0.5};          // scan points enter the map at most one per cube this size
-  double source_voxel_m{2.0};         // registration uses at most one scan point per cube this size
-  double map_radius_m{100.0};         // map voxels farther than this from the sensor are dropped
-  double min_range_m{1.0};            // nearer returns (the platform, the operator) are not used
-  double max_range_m{100.0};          // farther returns are not used
-  double initial_threshold_m{2.0};    // correspondence distance before motion statistics exist
-  double min_motion_m{0.1};           // prediction errors below this do not enter the statistics
-  double min_threshold_m{0.3};        // floor of the adaptive correspondence distance
-  int max_iterations{30};             // ICP iterations per scan at most
-  double convergence_m{1e-3};         // ICP stops when a step moves less than this (m and rad)
+  double voxel_size_m{1.0};         // local-map voxel edge; the nearest-neighbour search spans
+                                    // one voxel, so this bounds the correspondence distance
+  int max_points_per_voxel{20};     // points kept per map voxel (bounded memory and search)
+  double map_spacing_m{0.5};        // scan points enter the map at most one per cube this size
+  double source_voxel_m{2.0};       // registration uses at most one scan point per cube this size
+  double map_radius_m{100.0};       // map voxels farther than this from the sensor are dropped
+  double min_range_m{1.0};          // nearer returns (the platform, the operator) are not used
+  double max_range_m{100.0};        // farther returns are not used
+  double initial_threshold_m{2.0};  // correspondence distance before motion statistics exist
+  double min_motion_m{0.1};         // prediction errors below this do not enter the statistics
+  double min_threshold_m{0.3};      // floor of the adaptive correspondence distance
+  int max_iterations{30};           // ICP iterations per scan at most
+  double convergence_m{1e-3};       // ICP stops when a step moves less than this (m and rad)
   OdometryResidual residual{OdometryResidual::kPointToPlane};  // point_to_plane: a sparse scan's
-                                      // ground rings do not pull the estimate back to the last pose
+                                                               // ground rings do not pull the
+                                                               // estimate back to the last pose
   bool deskew{true};                  // motion-compensate each scan with the estimated velocity
   bool exclude_tracks{true};          // points of tracked objects stay out of ICP and the map
   double exclude_margin_m{0.3};       // ... inside their predicted boxes grown by this

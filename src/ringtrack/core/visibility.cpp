@@ -324,9 +324,11 @@ PointProbe VisibilityQuery::probe(const Eigen::Vector3d& world_point, double mar
   const auto i = scan_->index(loc->ring, loc->column);
   const BeamRay ray = cell_ray(loc->ring, loc->column);
   const Eigen::Vector3d v = world_point - ray.origin;
-  const double lateral = (v - v.dot(ray.direction) * ray.direction).norm();
+  const Eigen::Vector3d to_beam = v.dot(ray.direction) * ray.direction - v;
+  const bool returned = scan_->status(i) == ReturnStatus::kValid;
   return {classify(scan_->status(i), scan_->range_m(i), loc->distance_m, loc->distance_m, margin_m),
-          lateral};
+          to_beam.norm(), to_beam.z(), ray.direction.z(),
+          returned ? scan_->range_m(i) - loc->distance_m : 0.0};
 }
 
 BeamRay VisibilityQuery::cell_ray(int ring, int column) const {

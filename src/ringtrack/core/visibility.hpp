@@ -59,6 +59,12 @@ struct BoxBeam {
 struct PointProbe {
   Visibility visibility{Visibility::kUnknown};  ///< as VisibilityQuery::at
   double lateral_m{0.0};  ///< distance from the point to the deciding beam (0 when unknown)
+  /// Height of the beam above the point where it passes closest (world z; negative: below).
+  double beam_above_m{0.0};
+  /// World z of the beam's unit direction (negative: descending); 0 when unknown.
+  double beam_direction_z{0.0};
+  /// How far beyond the point the beam's return lies (negative: before it); 0 without a return.
+  double beyond_m{0.0};
 };
 
 /// Answers visibility questions about world points and boxes from one organized scan taken at a

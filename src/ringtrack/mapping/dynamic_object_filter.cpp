@@ -1,6 +1,7 @@
 #include "ringtrack/mapping/dynamic_object_filter.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -60,6 +61,25 @@ void compute_block_bounds(const std::vector<Eigen::Vector3f>& points,
       bounds[b] = {Eigen::Vector3f::Constant(-kInf), Eigen::Vector3f::Constant(kInf)};
     }
   }
+}
+
+// Both scans were taken from one viewpoint (a resting sensor): each cell's beam is the same.
+bool same_view(const LoggedScan& logged, const core::OrganizedScan& now, const core::Pose& pose) {
+  constexpr double kShiftM = 1e-3;
+  constexpr double kTurnRad = 1e-4;
+  return logged.rings == now.rings() && logged.columns == now.columns() &&
+         (logged.pose.translation - pose.translation).norm() <= kShiftM &&
+         logged.pose.rotation.normalized().angularDistance(pose.rotation.normalized()) <= kTurnRad;
+}
+
+// A descending beam that passes h above a point on the ground lands on the ground h / tan(its
+// depression) beyond it: at grazing angles that is metres, and the ground would be seen "free"
+// though nothing moved. Such a beam proves free space only when it ends farther than that.
+bool grazes_ground(const core::PointProbe& probe, double margin_m) {
+  if (probe.beam_direction_z >= 0.0 || probe.beam_above_m <= 0.0) return false;
+  const double sine = -probe.beam_direction_z;
+  const double run_per_drop = std::sqrt(std::max(0.0, 1.0 - sine * sine)) / sine;
+  return probe.beyond_m <= margin_m + probe.beam_above_m * run_per_drop;
 }
 
 }  // namespace
@@ -152,7 +172,12 @@ void DynamicObjectFilter::release_front() {
 const FilterResult& DynamicObjectFilter::process(
     const core::OrganizedScan& scan, const core::Pose& pose,
     const std::vector<core::Detection>& detections,
-    const std::vector<tracking::Hypothesis>& hypotheses) {
+    const std::vector<tracking::Hypothesis>& hypotheses, const ScanEvidence& evidence) {
+  if (evidence.segments != nullptr && evidence.segments->size() != scan.size()) {
+    throw core::InputError("mapping: " + std::to_string(evidence.segments->size()) +
+                           " segment labels for a scan of " + std::to_string(scan.size()) +
+                           " cells; the filter was left unchanged");
+  }
   for (const auto& h : hypotheses) {
     if (h.detection >= static_cast<int>(detections.size())) {
       throw core::InputError("mapping: hypothesis " + std::to_string(h.id) + " names detection " +
@@ -175,6 +200,7 @@ const FilterResult& DynamicObjectFilter::process(
   logged.rings = scan.rings();
   logged.columns = scan.columns();
   logged.removed_count = 0;
+  logged.candidates.clear();
   const Eigen::Isometry3d world_from_sensor = pose.isometry();
   const Eigen::Matrix3f rotation = world_from_sensor.linear().cast<float>();
   const Eigen::Vector3f translation = world_from_sensor.translation().cast<float>();
@@ -265,8 +291,115 @@ const FilterResult& DynamicObjectFilter::process(
   // Forget deleted hypotheses.
   std::erase_if(objects_, [&](const auto& entry) { return entry.second.touched != sequence; });
 
+  if (config_.free_space && evidence.visibility != nullptr) {
+    mark_candidates(current, scan, evidence.segments, hypotheses);
+    // Each logged scan is tested against the scan free_space_lag_scans later (a walker has left
+    // its place within half a second) and against the newest scan before it leaves the log (a
+    // person who stood for a while may leave later). A resting sensor's scans, one range
+    // comparison per candidate, are also tested at twice, four times ... the lag.
+    const auto lag = static_cast<std::size_t>(config_.free_space_lag_scans);
+    const auto release = static_cast<std::size_t>(config_.log_delay_scans);
+    for (std::size_t l = lag; l < log_.size() && l < release; l *= 2) {
+      clear_seen_through(log_[log_.size() - 1 - l], *evidence.visibility, pose, l == lag);
+    }
+    if (log_.size() > release) clear_seen_through(log_.front(), *evidence.visibility, pose, true);
+  }
   while (log_.size() > static_cast<std::size_t>(config_.log_delay_scans)) release_front();
   return result_;
+}
+
+void DynamicObjectFilter::mark_candidates(LoggedScan& logged, const core::OrganizedScan& scan,
+                                          const std::vector<std::uint8_t>* segments,
+                                          const std::vector<tracking::Hypothesis>& hypotheses) {
+  logged.candidates.clear();
+  logged.candidate_ranges.clear();
+  // Segmented points are candidates while the sensor rests, where a later scan tests them with
+  // one range comparison per cell. From a moving sensor every candidate costs a projection and
+  // a segmented scene (a hall, a park) has thousands: there only the hypotheses' surroundings
+  // are tested, and only with free_space_moving (docs/BENCHMARK.md, issue 12).
+  const bool resting = log_.size() >= 2 && same_view(log_[log_.size() - 2], scan, logged.pose);
+  if (!resting && !config_.free_space_moving) return;
+  const std::size_t n = logged.points.size();
+  is_candidate_.assign(n, 0);
+  if (segments != nullptr && resting) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if ((*segments)[logged.cells[i]] != 0) is_candidate_[i] = 1;
+    }
+  }
+  // Near every person or dynamic hypothesis: a head above its box, legs below it, an arm beside
+  // it (the points the boxes miss, docs/BENCHMARK.md, issue 12), and people never found dynamic.
+  // Not near other clutter: a moving sensor's park has hundreds of such hypotheses (trees,
+  // bushes), whose surroundings would cost a projection per point and hold no walker.
+  const auto reach = static_cast<float>(config_.free_space_reach_m);
+  const bool bounded = logged.bounded_points == n;
+  for (const auto& h : hypotheses) {
+    if (h.box.empty() || !(h.person || h.ever_dynamic)) continue;
+    const core::Box3 near{h.box.min.array() - reach, h.box.max.array() + reach};
+    for (std::size_t b = 0; b < logged.block_bounds.size(); ++b) {
+      if (bounded && !logged.block_bounds[b].intersects(near)) continue;
+      const std::size_t end = std::min(n, (b + 1) * LoggedScan::kBlockPoints);
+      for (std::size_t i = b * LoggedScan::kBlockPoints; i < end; ++i) {
+        if (near.contains(logged.points[i])) is_candidate_[i] = 1;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (is_candidate_[i] == 0) continue;
+    logged.candidates.push_back(static_cast<std::uint32_t>(i));
+    logged.candidate_ranges.push_back(scan.range_m(logged.cells[i]));
+  }
+}
+
+bool DynamicObjectFilter::clear_around(const core::VisibilityQuery& visibility,
+                                       const Eigen::Vector3f& point) const {
+  // From another viewpoint the one beam nearest a point may pass just beside a thin object (the
+  // edge of a pole, a branch) and see past it: every beam through the space around the point
+  // must see past it, none may end there or before it (the pole's near side hides its far one).
+  const auto r = static_cast<float>(config_.free_space_clearance_m);
+  const core::Box3 around{point.array() - r, point.array() + r};
+  const auto beams = visibility.in_box(around, config_.free_space_margin_m);
+  return beams.occupied == 0 && beams.occluded == 0;
+}
+
+void DynamicObjectFilter::clear_seen_through(LoggedScan& logged,
+                                             const core::VisibilityQuery& visibility,
+                                             const core::Pose& pose, bool moved_too) {
+  const core::OrganizedScan& now = visibility.scan();
+  const bool resting = same_view(logged, now, pose);
+  if (!resting && !(moved_too && config_.free_space_moving)) return;
+  const auto margin = static_cast<float>(config_.free_space_margin_m);
+  for (std::size_t k = 0; k < logged.candidates.size(); ++k) {
+    const std::uint32_t i = logged.candidates[k];
+    if (logged.removed[i] != 0) continue;
+    if (resting) {
+      // The same beam: one range comparison, no projection.
+      const std::uint32_t cell = logged.cells[i];
+      if (now.status(cell) != core::ReturnStatus::kValid ||
+          !(now.range_m(cell) > logged.candidate_ranges[k] + margin)) {
+        continue;
+      }
+    } else {
+      const auto probe =
+          visibility.probe(logged.points[i].cast<double>(), config_.free_space_margin_m);
+      if (probe.visibility != core::Visibility::kFree ||
+          probe.lateral_m > config_.free_space_lateral_m ||
+          grazes_ground(probe, config_.free_space_margin_m) ||
+          !clear_around(visibility, logged.points[i])) {
+        continue;
+      }
+    }
+    // Structure the map has seen occupied many times stays: range noise and mixed returns at
+    // edges see through a few of its points now and then.
+    const MapPoint* voxel = map_.voxel_at(logged.points[i]);
+    if (voxel != nullptr &&
+        voxel->count >= static_cast<std::uint32_t>(config_.free_space_protect_count)) {
+      ++result_.free_space_protected;
+      continue;
+    }
+    logged.removed[i] = 1;
+    ++logged.removed_count;
+    ++result_.free_space_points;
+  }
 }
 
 const FilterResult& DynamicObjectFilter::flush() {

@@ -14,6 +14,7 @@
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
+#include "ringtrack/core/visibility.hpp"
 #include "ringtrack/mapping/static_map.hpp"
 #include "ringtrack/tracking/tracker.hpp"
 
@@ -31,6 +32,9 @@ struct LoggedScan {
   std::vector<float> intensities;
   std::vector<std::uint8_t> removed;  ///< 1 = removed as part of a dynamic object
   std::size_t removed_count{0};
+  /// Points the free-space line tests against later scans (segmented or near a hypothesis).
+  std::vector<std::uint32_t> candidates;
+  std::vector<float> candidate_ranges;  ///< each candidate's measured range (m)
   /// Bounds of the finite points [kBlockPoints * b, kBlockPoints * (b + 1)): consecutive points
   /// lie along a ring, so a box meets few blocks (empty when not computed).
   std::vector<core::Box3> block_bounds;
@@ -57,6 +61,17 @@ struct FilterResult {
   std::size_t map_voxels_removed{
       0};                       ///< voxels removed from the map (decisions too late for the log)
   std::size_t scans_to_map{0};  ///< scans that left the log into the map
+  /// Points of logged scans removed because this scan saw through them (free-space line).
+  std::size_t free_space_points{0};
+  /// Points this scan saw through that stayed: their voxel is structure seen many times.
+  std::size_t free_space_protected{0};
+};
+
+/// What the scan itself says, for the free-space line: both may be absent (then only the
+/// tracks remove points).
+struct ScanEvidence {
+  const core::VisibilityQuery* visibility{nullptr};    ///< the scan seen from its pose
+  const std::vector<std::uint8_t>* segments{nullptr};  ///< per cell, non-zero = segmented
 };
 
 /// Keeps the log and the map; call process() once per scan after Tracker::update().
@@ -66,11 +81,14 @@ class DynamicObjectFilter {
   explicit DynamicObjectFilter(const core::MappingConfig& config);
 
   /// Filters one scan. detections and hypotheses are the tracker's input and output for this
-  /// scan (world frame; Hypothesis::detection indexes detections). Throws core::InputError when
-  /// a hypothesis names a detection that does not exist.
+  /// scan (world frame; Hypothesis::detection indexes detections). With evidence (the scan's
+  /// visibility query and segment labels) the free-space line runs too (mapping.free_space).
+  /// Throws core::InputError when a hypothesis names a detection that does not exist or the
+  /// segment labels do not match the scan.
   const FilterResult& process(const core::OrganizedScan& scan, const core::Pose& pose,
                               const std::vector<core::Detection>& detections,
-                              const std::vector<tracking::Hypothesis>& hypotheses);
+                              const std::vector<tracking::Hypothesis>& hypotheses,
+                              const ScanEvidence& evidence = {});
   /// Moves every logged scan into the map (end of a run).
   const FilterResult& flush();
 
@@ -91,7 +109,7 @@ class DynamicObjectFilter {
   // History of one hypothesis, bounded by the log window (older static boxes are folded into
   // one union) and by the tracker's coasting limit (gap boxes).
   struct ObjectHistory {
-    bool removing{false};  // turned removable (mapping.remove): its points leave
+    bool removing{false};            // turned removable (mapping.remove): its points leave
     std::deque<BoxAt> static_boxes;  // boxes while static, for scans still in the log
     core::Box3 expired_static;       // union of static boxes whose scans are in the map
     std::vector<BoxAt> gap;          // predicted boxes while a dynamic hypothesis is missed
@@ -107,6 +125,17 @@ class DynamicObjectFilter {
   void remove_object_box(LoggedScan& scan, const core::Box3& box);
   [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;
   void release_front();
+  // The candidates of the scan just logged: segmented points and points near a hypothesis.
+  void mark_candidates(LoggedScan& logged, const core::OrganizedScan& scan,
+                       const std::vector<std::uint8_t>* segments,
+                       const std::vector<tracking::Hypothesis>& hypotheses);
+  // Whether no beam of the visibility query ends within free_space_clearance_m of the point.
+  [[nodiscard]] bool clear_around(const core::VisibilityQuery& visibility,
+                                  const Eigen::Vector3f& point) const;
+  // Removes the candidates of a logged scan that the newest scan (seen through the visibility
+  // query, taken at pose) sees through; from another viewpoint only when moved_too.
+  void clear_seen_through(LoggedScan& logged, const core::VisibilityQuery& visibility,
+                          const core::Pose& pose, bool moved_too);
 
   core::MappingConfig config_;
   StaticMap map_;
@@ -114,6 +143,7 @@ class DynamicObjectFilter {
   std::deque<LoggedScan> log_;
   std::vector<LoggedScan> released_;
   std::vector<std::int32_t> point_of_cell_;
+  std::vector<std::uint8_t> is_candidate_;  // per point of the scan being logged
   std::unordered_map<std::uint64_t, ObjectHistory> objects_;
   std::uint64_t next_sequence_{0};
   FilterResult result_;

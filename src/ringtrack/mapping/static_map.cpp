@@ -275,6 +275,18 @@ MapPoint& StaticMap::locate(std::uint64_t key, std::uint32_t fp) {
   }
 }
 
+const MapPoint* StaticMap::voxel_at(const Eigen::Vector3f& p) const {
+  std::uint64_t key = 0;
+  if (size_ == 0 || !voxel_key(p, inverse_size_, key)) return nullptr;
+  const std::uint32_t fp = fingerprint(key);
+  if (phase_ == Phase::kMoving) {
+    const std::size_t o = find_old(key, fp);
+    if (o < old_.size) return &voxel(slot_index(old_[o])).point;
+  }
+  const std::size_t i = find(key);
+  return i < table_.size ? &voxel(slot_index(table_[i])).point : nullptr;
+}
+
 void StaticMap::accumulate(MapPoint& m, const Eigen::Vector3f& p, float intensity) {
   if (m.count >= kSettledCount) return;  // the mean is settled
   ++m.count;

@@ -51,6 +51,8 @@ class StaticMap {
   void insert(const std::vector<Eigen::Vector3f>& points, const std::vector<float>& intensities,
               const std::vector<std::uint8_t>& skip, const std::vector<std::uint32_t>& cells,
               SettledCells& settled);
+  /// The voxel p falls in, or nullptr (no such voxel, or p outside the index range).
+  [[nodiscard]] const MapPoint* voxel_at(const Eigen::Vector3f& p) const;
   /// Removes every voxel whose mean lies inside box; returns how many.
   std::size_t remove_inside(const core::Box3& box);
   /// Removes every voxel.
