@@ -22,9 +22,8 @@ double elapsed_ms(Clock::time_point from, Clock::time_point to) {
 std::string older_than_previous(std::int64_t stamp_ns, std::int64_t previous_ns) {
   std::ostringstream text;
   text << "stamp " << stamp_ns << " ns is " << std::fixed << std::setprecision(9)
-       << static_cast<double>(previous_ns - stamp_ns) * 1e-9
-       << " s older than the previous scan's " << previous_ns
-       << " ns (a clock step or a corrupt stamp); skipped";
+       << static_cast<double>(previous_ns - stamp_ns) * 1e-9 << " s older than the previous scan's "
+       << previous_ns << " ns (a clock step or a corrupt stamp); skipped";
   return text.str();
 }
 
@@ -55,6 +54,11 @@ Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
 const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core::Pose& pose) {
   if (tracker_.stamp_ns() != 0 && scan.stamp_ns < tracker_.stamp_ns()) {
     return skip(scan, older_than_previous(scan.stamp_ns, tracker_.stamp_ns()));
+  }
+  if (tracker_.stamp_ns() != 0 && scan.stamp_ns == tracker_.stamp_ns()) {
+    return skip(scan, "stamp " + std::to_string(scan.stamp_ns) +
+                          " ns repeats the previous scan's (a repeated message or a clock that "
+                          "stood still); skipped");
   }
   if (scan.rings() != model_.rings()) {
     throw core::InputError("pipeline: the scan at " + std::to_string(scan.stamp_ns) + " ns has " +
@@ -104,7 +108,8 @@ void Pipeline::predicted_track_boxes(std::int64_t stamp_ns) {
   if (!config_.odometry.exclude_tracks) return;
   const double dt_s =
       tracker_.stamp_ns() == 0 ? 0.0 : 1e-9 * static_cast<double>(stamp_ns - tracker_.stamp_ns());
-  const auto margin = Eigen::Vector3f::Constant(static_cast<float>(config_.odometry.exclude_margin_m));
+  const auto margin =
+      Eigen::Vector3f::Constant(static_cast<float>(config_.odometry.exclude_margin_m));
   for (const auto& h : tracker_.hypotheses()) {
     if (!h.reported || h.box.empty()) continue;
     const Eigen::Vector3f shift = (dt_s * h.filter.velocity()).cast<float>();
@@ -120,8 +125,9 @@ const FrameResult& Pipeline::process_with_odometry(core::OrganizedScan& scan) {
     return skip(scan, older_than_previous(scan.stamp_ns, tracker_.stamp_ns()));
   }
   if (odometry_ && odometry_->scans() > 0 && scan.stamp_ns == tracker_.stamp_ns()) {
-    return skip(scan, "stamp " + std::to_string(scan.stamp_ns) +
-                          " ns repeats the previous scan's: the odometry needs time to pass; skipped");
+    return skip(scan,
+                "stamp " + std::to_string(scan.stamp_ns) +
+                    " ns repeats the previous scan's: the odometry needs time to pass; skipped");
   }
   if (!odometry_) {
     odometry_ = std::make_unique<odometry::Odometry>(config_.odometry, odometry_start_.isometry());
