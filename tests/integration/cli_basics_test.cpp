@@ -74,7 +74,7 @@ TEST(CliBasics, OutputThatCannotBeWrittenIsAnError) {
   // Issue 16: `dump-config > /dev/full` exited 0. The braces redirect the tool's own output.
   const auto r = run_command("{ " + kCli + " dump-config > /dev/full; }");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.err, "ringtrack: error: cannot write to standard output\n");
+  EXPECT_EQ(r.err, "ringtrack: error: cannot write to standard output: No space left on device\n");
 }
 
 TEST(CliBasics, DemoFindsTheFivePeople) {
