@@ -10,6 +10,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -136,7 +137,8 @@ TEST(RunRobustnessCli, CorruptBagMessageIsSkippedAndCounted) {
   EXPECT_NE(r.err.find("ringtrack: warning: " + bag.string() + ": scan 1: unreadable, skipped: "),
             std::string::npos)
       << r.err;
-  EXPECT_NE(r.err.find("message 1"), std::string::npos) << r.err;
+  // Scans count from 0, a bag's messages from 1.
+  EXPECT_NE(r.err.find("message 2"), std::string::npos) << r.err;
   EXPECT_NE(r.out.find("scans            3 (1 more skipped: unreadable)"), std::string::npos)
       << r.out;
   const auto j = run_json(dir + "/out");
@@ -150,7 +152,7 @@ TEST(RunRobustnessCli, CorruptBagMessageIsSkippedAndCounted) {
       run_command(kCli + " run " + bag.string() +
                   " --odometry off --no-plots --on-bad-scan stop --out " + dir + "/stop");
   EXPECT_EQ(stop.exit_code, 1);
-  EXPECT_NE(stop.err.find("message 1"), std::string::npos) << stop.err;
+  EXPECT_NE(stop.err.find("message 2"), std::string::npos) << stop.err;
   EXPECT_EQ(run_json(dir + "/stop")["complete"], false);
   fs::remove_all(dir);
 }
@@ -438,8 +440,8 @@ TEST_P(RunStopSignal, LiveRunClosesEverythingAndSaysInterrupted) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Signals, RunStopSignal, ::testing::Values(SIGTERM, SIGINT),
-                         [](const auto& info) {
-                           return std::string(info.param == SIGTERM ? "SIGTERM" : "SIGINT");
+                         [](const auto& param_info) {
+                           return std::string(param_info.param == SIGTERM ? "SIGTERM" : "SIGINT");
                          });
 
 TEST(ConvertStopSignal, SigtermEndsTheRecordingWithACompleteSequence) {
@@ -518,8 +520,9 @@ TEST(RunRobustnessCli, StandardOutputThatCannotBeWrittenIsAnError) {
   for (const std::string args : {"dump-config", "sensors", "--version", "--help", "run --help"}) {
     const auto r = run_command("{ " + kCli + " " + args + " > /dev/full; }");
     EXPECT_EQ(r.exit_code, 1) << args;
-    EXPECT_EQ(r.err, "ringtrack: error: cannot write to standard output: No space left on device\n")
-        << args;
+    EXPECT_EQ(r.err.rfind("ringtrack: error: cannot write to standard output", 0), 0u)
+        << args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << args << ": " << r.err;
   }
 }
 
