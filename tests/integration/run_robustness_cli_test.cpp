@@ -157,6 +157,47 @@ TEST(RunRobustnessCli, CorruptBagMessageIsSkippedAndCounted) {
   fs::remove_all(dir);
 }
 
+// convert writes sequences whose stamps increase: a scan whose stamp goes back is left out with
+// a warning, a corrupt message is skipped; both are counted in the sequence's run.json.
+TEST(RunRobustnessCli, ConvertSkipsStampsThatGoBackAndCorruptMessages) {
+  const std::string dir = testing::make_temp_dir("ringtrack-robust-");
+  const fs::path bag = fs::path(dir) / "bag";
+  const std::int64_t base = 1'700'000'001'000'000'000;
+  // Header stamps 1.0, 1.1, 1.05 (a clock step back), 1.2, (corrupt), 1.4 s.
+  const std::int64_t header_ns[] = {0,           100'000'000, 50'000'000,
+                                    200'000'000, 300'000'000, 400'000'000};
+  std::vector<test::TestBagMessage> messages;
+  for (int m = 0; m < 6; ++m) {
+    auto data = cloud_message(base + header_ns[m]);
+    if (m == 4) data.resize(data.size() / 2);
+    messages.push_back({0, base + m * 100'000'000LL, std::move(data)});
+  }
+  test::write_rosbag2(bag, {{"/points", "sensor_msgs/msg/PointCloud2"}}, messages);
+  const auto r = run_command(kCli + " convert " + bag.string() + " --out " + dir + "/seq");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("ringtrack: warning: " + bag.string() + ": scan 2: stamp "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("ringtrack: warning: " + bag.string() + ": scan 4: unreadable, skipped: "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("wrote 4 scans"), std::string::npos) << r.err;
+  const io::SequenceReader reader(dir + "/seq");
+  EXPECT_EQ(reader.size(), 4u);
+  const auto j = run_json(dir + "/seq");
+  EXPECT_EQ(j["complete"], true);
+  EXPECT_EQ(j["command"], "convert");
+  EXPECT_EQ(j["scans"]["read"], 6);
+  EXPECT_EQ(j["scans"]["processed"], 4);
+  EXPECT_EQ(j["scans"]["skipped_stamp"], 1);
+  EXPECT_EQ(j["scans"]["skipped_unreadable"], 1);
+  // A second convert into the folder is refused and leaves its run.json as it was.
+  const auto again = run_command(kCli + " convert " + bag.string() + " --out " + dir + "/seq");
+  EXPECT_EQ(again.exit_code, 1);
+  EXPECT_EQ(run_json(dir + "/seq")["complete"], true);
+  fs::remove_all(dir);
+}
+
 // A simulated sequence folder (15 scans) that each test copies and damages.
 class RunSequenceRobustness : public ::testing::Test {
  protected:
