@@ -502,6 +502,50 @@ TEST(ConvertStopSignal, SigtermEndsTheRecordingWithACompleteSequence) {
   fs::remove_all(dir);
 }
 
+// simulate honours SIGTERM like Ctrl-C too: a long simulation stopped early is a complete,
+// shorter sequence whose run.json says it was interrupted.
+TEST(SimulateStopSignal, SigtermEndsWithACompleteShorterSequence) {
+  const std::string dir = testing::make_temp_dir("ringtrack-robust-simulate-signal-");
+  const std::string out = dir + "/seq";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int sink = ::open("/dev/null", O_WRONLY);
+    ::dup2(sink, 1);
+    ::execl(kCli.c_str(), "ringtrack", "simulate", "1", "--duration", "3600", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // Wait until the simulator has written a few scans, then stop it.
+  for (int i = 0; i < 500; ++i) {
+    std::error_code ec;
+    if (fs::exists(fs::path(out) / "scans" / io::scan_file_name(3), ec)) break;
+    std::this_thread::sleep_for(10ms);
+  }
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  pid_t done = 0;
+  for (int i = 0; i < 1000 && done == 0; ++i) {
+    done = ::waitpid(pid, &status, WNOHANG);
+    if (done == 0) std::this_thread::sleep_for(10ms);
+  }
+  if (done == 0) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+    FAIL() << "simulate did not stop on SIGTERM";
+  }
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const io::SequenceReader reader(out);  // sequence.yaml written: complete
+  EXPECT_GE(reader.size(), 4u);
+  EXPECT_LT(reader.size(), 36000u);
+  const auto j = run_json(out);
+  EXPECT_EQ(j["complete"], true);
+  EXPECT_EQ(j["interrupted"], "SIGTERM");
+  EXPECT_EQ(j["scans"]["processed"].get<std::size_t>(), reader.size());
+  fs::remove_all(dir);
+}
+
 // Every option `convert` takes to read and decode an input, `run` takes too (one shared set):
 // a capture on port 2369 converts and runs alike.
 TEST(RunRobustnessCli, RunTakesEveryDecoderOptionConvertTakes) {
