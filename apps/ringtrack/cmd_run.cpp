@@ -280,6 +280,8 @@ class RunInput {
         if (const auto a = deskew_pair(index)) {
           pose = pipeline::deskew_scan(scan, sequence_->pose(*a), sequence_->pose(*a + 1));
           ++deskewed_;
+        } else {
+          ++no_motion_;
         }
       }
       return true;
@@ -345,9 +347,12 @@ class RunInput {
     if (!deskew_) return deskew_off_;
     std::string out = std::to_string(deskewed_) + " of " + std::to_string(scans_) + " scans (" +
                       deskew_method_ + ")";
-    if (deskewed_ < scans_) {
-      out +=
-          "; " + std::to_string(scans_ - deskewed_) + " without per-column times left as they are";
+    if (const std::size_t untimed = scans_ - deskewed_ - no_motion_; untimed > 0) {
+      out += "; " + std::to_string(untimed) + " without per-column times left as they are";
+    }
+    if (no_motion_ > 0) {
+      out += "; " + std::to_string(no_motion_) +
+             " left as they are (no neighbouring scan with a later stamp: stamps going back)";
     }
     return out;
   }
@@ -399,6 +404,7 @@ class RunInput {
   std::string deskew_method_;  // where the motion comes from (deskew_)
   std::string deskew_off_;     // why not (!deskew_)
   std::size_t scans_{0}, deskewed_{0};
+  std::size_t no_motion_{0};  // sequence scans without a forward-moving pose pair
 };
 
 // The MCAP sink (--mcap) with the run's metadata: what wrote it, from what, with which config.
