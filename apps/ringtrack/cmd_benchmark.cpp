@@ -282,6 +282,9 @@ bool plot_stage_times(const fs::path& timing_csv, const fs::path& png) {
   return run_plot_script("plot_stage_times.py", {timing_csv, png});
 }
 
+void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
+                    const std::vector<experiment::PlannedRun>& runs, io::RunStatus& status);
+
 void run_benchmark(const BenchmarkOptions& o) {
   const core::Config config = o.config.load();
   core::validate_config(config);
@@ -291,7 +294,8 @@ void run_benchmark(const BenchmarkOptions& o) {
   plan.scenario_files = o.scenario_files;
   if (o.validation) {
     const fs::path dir = fs::path(RINGTRACK_CONFIG_DIR) / "validation";
-    for (const std::string& f : experiment::scenario_files_in(dir)) plan.scenario_files.push_back(f);
+    for (const std::string& f : experiment::scenario_files_in(dir))
+      plan.scenario_files.push_back(f);
   }
   plan.duration_s = o.duration_s;
   plan.with_static = o.sensors != "moving";
@@ -302,6 +306,21 @@ void run_benchmark(const BenchmarkOptions& o) {
   std::error_code ec;
   fs::create_directories(out, ec);
   if (ec) throw core::InputError(o.out + ": cannot create the output folder: " + ec.message());
+  // run.json says whether the folder's outputs are whole (docs/formats.md).
+  io::RunStatusFile status_file(out / "run.json", new_run_status("benchmark", ""));
+  status_file.start();
+  try {
+    benchmark_into(o, config, runs, status_file.status());
+  } catch (const std::exception& e) {
+    status_file.fail(e.what());
+    throw;
+  }
+  status_file.finish();
+}
+
+void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
+                    const std::vector<experiment::PlannedRun>& runs, io::RunStatus& status) {
+  const fs::path out = o.out;
   const std::string config_text = core::dump_config(config);
   io::write_file(out / "config.yaml", config_text);
 
@@ -342,6 +361,8 @@ void run_benchmark(const BenchmarkOptions& o) {
     }
     BenchmarkCase c = experiment::run_benchmark_case(s, config, case_options);
     c.validation = run.validation;
+    status.scans_read += static_cast<std::uint64_t>(c.scans);
+    status.scans_processed += static_cast<std::uint64_t>(c.scans);
     if (tracks_csv) {
       tracks_csv->close();
       objects_csv->close();
@@ -423,7 +444,7 @@ void run_benchmark(const BenchmarkOptions& o) {
     }
     std::cout << "\n";
   }
-  std::cout << "outputs: " << o.out << "/{report.md,results.json,timing.csv,config.yaml"
+  std::cout << "outputs: " << o.out << "/{report.md,results.json,timing.csv,config.yaml,run.json"
             << (plotted ? ",stage_times.png" : "") << "}\n";
 }
 

@@ -3,12 +3,11 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <set>
@@ -20,6 +19,7 @@
 #include "plots.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/eval/statistics.hpp"
+#include "ringtrack/io/bad_scans.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/foxglove_sink.hpp"
 #include "ringtrack/io/mcap_bag_reader.hpp"
@@ -35,26 +35,18 @@
 #include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 #include "ringtrack/version.hpp"
+#include "stop_signals.hpp"
 
 namespace ringtrack::cli {
 namespace {
 
 namespace fs = std::filesystem;
 
-// Set by Ctrl-C: the run stops after the current scan and closes every output properly.
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_interrupt(int) {
-  g_interrupted.store(true);
-}
-
 struct RunOptions {
   std::string input;
   std::string out;
-  std::string format{"auto"};
-  std::string topic;
-  std::string sensor;
-  std::string calibration;
-  std::string metadata;
+  InputOptions source;  // --format, --topic, the decoder's options (shared with convert)
+  std::string on_bad_scan{"skip"};
   std::string poses;
   std::string poses_format{"tum"};
   std::string mcap;
@@ -115,9 +107,9 @@ class OdometryLog {
     std::snprintf(line, sizeof line,
                   "%zu,%s,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%d,%d,%.5f,%d,%zu,%zu,%zu,%.4f,%.4f\n",
                   index, io::format_stamp(r.pose.stamp_ns).c_str(), t.x(), t.y(), t.z(), q.x(),
-                  q.y(), q.z(), q.w(), r.registered ? 1 : 0, r.degenerate ? 1 : 0,
-                  r.weakest_share, r.iterations, r.source_points, r.correspondences,
-                  r.excluded_points, r.threshold_m, ms);
+                  q.y(), q.z(), q.w(), r.registered ? 1 : 0, r.degenerate ? 1 : 0, r.weakest_share,
+                  r.iterations, r.source_points, r.correspondences, r.excluded_points,
+                  r.threshold_m, ms);
     file_.write(std::string_view(line));
     ++scans_;
     if (r.degenerate) ++degenerate_;
@@ -207,7 +199,13 @@ std::pair<std::int64_t, std::int64_t> column_time_span(const core::OrganizedScan
 // (docs/inputs.md, "Sensor poses and motion compensation").
 class RunInput {
  public:
-  RunInput(const RunOptions& o, bool odometry, bool odometry_deskew) : odometry_(odometry) {
+  /// Called for each scan that could not be read and was skipped: its number and the error.
+  using SkipHandler = std::function<void(std::uint64_t index, const std::string& error)>;
+
+  RunInput(const RunOptions& o, bool odometry, bool odometry_deskew, SkipHandler on_skip)
+      : odometry_(odometry),
+        policy_(io::parse_bad_scan_policy(o.on_bad_scan)),
+        on_skip_(std::move(on_skip)) {
     open(o);
     if (!odometry_) return;
     // The odometry estimates the poses and compensates the motion with its own velocity.
@@ -218,8 +216,9 @@ class RunInput {
 
   void open(const RunOptions& o) {
     if (std::filesystem::is_directory(o.input) && !is_rosbag2_folder(o.input) &&
-        o.format == "auto") {
+        o.source.format == "auto") {
       io::SequenceReadOptions read_options;
+      read_options.scan_rate_hz = o.source.scan_rate_hz;  // plain folders without stamps
       if (!o.poses.empty()) {
         read_options.poses = o.poses;
         read_options.poses_format =
@@ -243,14 +242,10 @@ class RunInput {
       }
       return;
     }
-    io::ScanSourceOptions source_options;
-    source_options.format = io::parse_scan_input_format(o.format);
-    source_options.topic = o.topic;
-    source_options.velodyne.decoder.model = o.sensor;
-    source_options.calibration = o.calibration;
-    source_options.metadata = o.metadata;
-    source_options.velodyne.interrupt = &g_interrupted;
+    io::ScanSourceOptions source_options = o.source.source_options();
+    source_options.velodyne.interrupt = &StopSignals::stop_flag();
     source_ = io::open_scan_source(o.input, source_options);
+    reader_ = std::make_unique<io::ScanReader>(*source_, policy_, on_skip_);
     if (!o.poses.empty()) {
       if (o.poses_format != "tum") {
         throw core::InputError(
@@ -272,7 +267,7 @@ class RunInput {
   /// it with; false at the end.
   bool next(std::size_t& index, core::OrganizedScan& scan, core::Pose& pose) {
     if (sequence_) {
-      if (!sequence_->next(item_)) return false;
+      if (!next_sequence_scan()) return false;
       index = item_.index;
       scan = std::move(item_.scan);
       pose = item_.pose;
@@ -282,15 +277,19 @@ class RunInput {
       if (deskew_ && last_ns > first_ns) {
         // Motion between this scan's stamp and the next one's; the last scan extrapolates the
         // motion between the previous scan and itself.
-        const std::size_t a = index + 1 < sequence_->size() ? index : index - 1;
-        pose = pipeline::deskew_scan(scan, sequence_->pose(a), sequence_->pose(a + 1));
-        ++deskewed_;
+        if (const auto a = deskew_pair(index)) {
+          pose = pipeline::deskew_scan(scan, sequence_->pose(*a), sequence_->pose(*a + 1));
+          ++deskewed_;
+        } else {
+          ++no_motion_;
+        }
       }
       return true;
     }
-    auto next_scan = source_->next();
+    std::uint64_t number = 0;
+    auto next_scan = reader_->next(number);
     if (!next_scan) return false;
-    index = count_++;
+    index = static_cast<std::size_t>(number);
     scan = std::move(*next_scan);
     pose = core::Pose{};
     pose.stamp_ns = scan.stamp_ns;
@@ -314,6 +313,14 @@ class RunInput {
     pose = pipeline::deskew_scan(scan, trajectory_.at(first_ns), trajectory_.at(last_ns));
     ++deskewed_;
     return true;
+  }
+  /// Scans taken from the input so far, skipped ones included.
+  [[nodiscard]] std::uint64_t read() const {
+    return sequence_ ? sequence_attempts_ : reader_->read();
+  }
+  /// Scans skipped so far because they could not be read (--on-bad-scan skip).
+  [[nodiscard]] std::uint64_t unreadable() const {
+    return sequence_ ? sequence_skipped_ : reader_->skipped();
   }
   /// The sensor that took the scans (for recordings known once the first scan was read).
   [[nodiscard]] const core::SensorModel& sensor_model() const {
@@ -340,29 +347,64 @@ class RunInput {
     if (!deskew_) return deskew_off_;
     std::string out = std::to_string(deskewed_) + " of " + std::to_string(scans_) + " scans (" +
                       deskew_method_ + ")";
-    if (deskewed_ < scans_) {
-      out +=
-          "; " + std::to_string(scans_ - deskewed_) + " without per-column times left as they are";
+    if (const std::size_t untimed = scans_ - deskewed_ - no_motion_; untimed > 0) {
+      out += "; " + std::to_string(untimed) + " without per-column times left as they are";
+    }
+    if (no_motion_ > 0) {
+      out += "; " + std::to_string(no_motion_) +
+             " left as they are (no neighbouring scan with a later stamp: stamps going back)";
     }
     return out;
   }
 
  private:
+  // The next scan of the folder into item_, passing over unreadable files under
+  // --on-bad-scan skip; false at the end.
+  bool next_sequence_scan() {
+    for (;;) {
+      if (sequence_attempts_ >= sequence_->size()) return false;
+      const std::uint64_t number = sequence_attempts_++;
+      try {
+        return sequence_->next(item_);
+      } catch (const core::InputError& e) {
+        if (policy_ == io::BadScanPolicy::kStop) throw;
+        ++sequence_skipped_;
+        if (on_skip_) on_skip_(number, e.what());
+      }
+    }
+  }
+
+  // The scans whose poses give scan i's motion: i and i + 1, or i - 1 and i for the last scan
+  // or when the stamps go back at i + 1 (a clock step: that scan is skipped); none when neither
+  // pair moves forward in time.
+  [[nodiscard]] std::optional<std::size_t> deskew_pair(std::size_t i) const {
+    const auto forward = [this](std::size_t a) {
+      return sequence_->pose(a + 1).stamp_ns > sequence_->pose(a).stamp_ns;
+    };
+    if (i + 1 < sequence_->size() && forward(i)) return i;
+    if (i > 0 && forward(i - 1)) return i - 1;
+    return std::nullopt;
+  }
+
   static bool is_rosbag2_folder(const std::string& path) {
     return std::filesystem::exists(std::filesystem::path(path) / "metadata.yaml") ||
            io::is_mcap_bag(path);
   }
 
   bool odometry_{false};  // poses come from the odometry, not from the input
+  io::BadScanPolicy policy_;
+  SkipHandler on_skip_;
   std::unique_ptr<io::SequenceReader> sequence_;
+  std::uint64_t sequence_attempts_{0}, sequence_skipped_{0};
   std::unique_ptr<io::ScanSource> source_;
+  std::unique_ptr<io::ScanReader> reader_;
   io::Trajectory trajectory_;
   io::SequenceScan item_;
-  std::size_t count_{0};
   bool deskew_{false};         // compensate scans that have per-column times
   std::string deskew_method_;  // where the motion comes from (deskew_)
   std::string deskew_off_;     // why not (!deskew_)
   std::size_t scans_{0}, deskewed_{0};
+  std::size_t no_motion_{0};  // sequence scans without a forward-moving pose pair
 };
 
 // The MCAP sink (--mcap) with the run's metadata: what wrote it, from what, with which config.
@@ -375,7 +417,7 @@ std::unique_ptr<io::FoxgloveSink> open_mcap(const RunOptions& o, const core::Con
   sink->write_metadata("ringtrack", {{"version", kVersion},
                                      {"command", "run"},
                                      {"input", o.input},
-                                     {"format", o.format},
+                                     {"format", o.source.format},
                                      {"poses", o.poses},
                                      {"deskew", o.no_deskew ? "off" : "auto"}});
   sink->write_metadata("config", {{"config.yaml", core::dump_config(config)}});
@@ -416,10 +458,11 @@ core::Pose odometry_start(const std::string& path, std::int64_t stamp_ns) {
 
 // The odometry's lines of the run summary, and a warning when some poses are unreliable.
 void print_odometry_summary(const OdometryLog& log) {
-  std::printf("odometry         %zu of %zu scans flagged unreliable (too little geometry or not "
-              "registered); ms per scan median %.3f, p95 %.3f\n",
-              log.degenerate(), log.scans(), eval::quantile(log.times_ms(), 0.5),
-              eval::quantile(log.times_ms(), 0.95));
+  std::printf(
+      "odometry         %zu of %zu scans flagged unreliable (too little geometry or not "
+      "registered); ms per scan median %.3f, p95 %.3f\n",
+      log.degenerate(), log.scans(), eval::quantile(log.times_ms(), 0.5),
+      eval::quantile(log.times_ms(), 0.95));
   if (log.degenerate() > 0) {
     std::fprintf(stderr,
                  "ringtrack: warning: odometry: %zu of %zu scans had too little geometry to fix "
@@ -429,16 +472,51 @@ void print_odometry_summary(const OdometryLog& log) {
   }
 }
 
-void run(const RunOptions& o) {
-  const bool odometry = use_odometry(o.odometry, o.input, o.format, o.poses);
-  core::Config config = o.config.load();
-  if (odometry && o.no_deskew) config.odometry.deskew = false;
-  RunInput input(o, odometry, config.odometry.deskew);
+// Warnings about skipped scans on stderr: the first few, then one line saying the rest are only
+// counted (run.json lists them), so a recording full of bad scans does not flood the terminal.
+class SkipWarnings {
+ public:
+  explicit SkipWarnings(std::string input) : input_(std::move(input)) {}
+  void warn(std::uint64_t index, const std::string& reason) {
+    ++count_;
+    if (count_ <= kShown) {
+      std::fprintf(stderr, "ringtrack: warning: %s: scan %llu: %s\n", input_.c_str(),
+                   static_cast<unsigned long long>(index), reason.c_str());
+    } else if (count_ == kShown + 1) {
+      std::fprintf(stderr,
+                   "ringtrack: warning: %s: more scans skipped; they are counted in the summary "
+                   "and listed in run.json\n",
+                   input_.c_str());
+    }
+  }
 
+ private:
+  static constexpr std::uint64_t kShown = 20;
+  std::string input_;
+  std::uint64_t count_{0};
+};
+
+// The "scans" line's note on skipped scans, "" when none.
+std::string skipped_note(const io::RunStatus& s) {
+  const std::uint64_t skipped = s.scans_skipped_unreadable + s.scans_skipped_stamp;
+  if (skipped == 0) return "";
+  std::string note = " (" + std::to_string(skipped) + " more skipped: ";
+  if (s.scans_skipped_unreadable > 0 && s.scans_skipped_stamp > 0) {
+    note += std::to_string(s.scans_skipped_unreadable) + " unreadable, " +
+            std::to_string(s.scans_skipped_stamp) + " with a stamp not after the scan before";
+  } else if (s.scans_skipped_unreadable > 0) {
+    note += "unreadable";
+  } else {
+    note += "stamp not after the scan before";
+  }
+  return note + ")";
+}
+
+// The run proper, once the output folder and its run.json exist; keeps `status` up to date.
+void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunStatus& status,
+              SkipWarnings& warnings, RunInput& input) {
   const fs::path out = o.out;
   std::error_code ec;
-  fs::create_directories(out, ec);
-  if (ec) throw core::InputError(o.out + ": cannot create the output folder: " + ec.message());
   if (o.filtered_scans) fs::create_directories(out / "filtered", ec);
   {
     io::OutputFile config_file(out / "config.yaml");
@@ -467,46 +545,58 @@ void run(const RunOptions& o) {
   std::vector<core::Pose> poses;
   std::optional<mapping::StaticMap> raw_map;
   if (!o.no_plots) raw_map.emplace(config.mapping.voxel_size_m);
-  g_interrupted.store(false);
-  const auto previous_handler = std::signal(SIGINT, on_interrupt);
-  while (!g_interrupted.load() && input.next(index, scan, pose)) {
-    if (!pipeline) {
-      pipeline = std::make_unique<pipeline::Pipeline>(config, input.sensor_model());
-      if (odometry && !o.odometry_start.empty()) {
-        pipeline->set_odometry_start(odometry_start(o.odometry_start, scan.stamp_ns));
+  for (;;) {
+    // Ctrl-C or SIGTERM: stop after the scan at hand; what follows closes every output.
+    if (StopSignals::requested()) break;
+    try {
+      if (!input.next(index, scan, pose)) break;
+      status.scans_read = input.read();
+      if (!pipeline) {
+        pipeline = std::make_unique<pipeline::Pipeline>(config, input.sensor_model());
+        if (odometry && !o.odometry_start.empty()) {
+          pipeline->set_odometry_start(odometry_start(o.odometry_start, scan.stamp_ns));
+        }
       }
+      const auto& result =
+          odometry ? pipeline->process_with_odometry(scan) : pipeline->process(scan, pose);
+      if (result.skipped) {  // counted by the pipeline; the run goes on
+        ++status.scans_skipped_stamp;
+        status.add_skipped(index, result.skip_reason);
+        warnings.warn(index, result.skip_reason);
+        continue;
+      }
+      if (odometry) {
+        pose = result.pose;
+        odometry_log->write(index, pipeline->odometry_result(), result.times.odometry_ms);
+      }
+      poses.push_back(pose);
+      if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
+      rows.clear();
+      for (const auto& h : result.hypotheses) {
+        if (!h.reported) continue;  // unconfirmed or lost (docs/tracking.md, "What is reported")
+        rows.push_back(track_row(index, scan.stamp_ns, h));
+        track_ids.insert(h.id);
+        if (h.ever_dynamic) dynamic_ids.insert(h.id);
+      }
+      tracks.write(rows);
+      timing.write(timing_row(index, scan.stamp_ns, result.times, odometry));
+      total_ms.push_back(result.times.total_ms);
+      ++status.scans_processed;
+      if (mcap) mcap->write_frame(scan, pose, result, pipeline->static_map());
+      if (filtered) {
+        filtered->hold(index, scan);
+        filtered->write_released(pipeline->dynamic_filter());
+      }
+      if (progress) print_progress(index + 1, input.size(), start);
+    } catch (...) {
+      // The scan that stopped the run: unreadable (--on-bad-scan stop) or failing later.
+      status.scans_read = input.read();
+      status.scans_failed = 1;
+      throw;
     }
-    const auto& result =
-        odometry ? pipeline->process_with_odometry(scan) : pipeline->process(scan, pose);
-    if (result.skipped) {  // counted by the pipeline; the run goes on
-      std::fprintf(stderr, "ringtrack: warning: %s: scan %zu: %s\n", o.input.c_str(), index,
-                   result.skip_reason.c_str());
-      continue;
-    }
-    if (odometry) {
-      pose = result.pose;
-      odometry_log->write(index, pipeline->odometry_result(), result.times.odometry_ms);
-    }
-    poses.push_back(pose);
-    if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
-    rows.clear();
-    for (const auto& h : result.hypotheses) {
-      if (!h.reported) continue;  // unconfirmed or lost (docs/tracking.md, "What is reported")
-      rows.push_back(track_row(index, scan.stamp_ns, h));
-      track_ids.insert(h.id);
-      if (h.ever_dynamic) dynamic_ids.insert(h.id);
-    }
-    tracks.write(rows);
-    timing.write(timing_row(index, scan.stamp_ns, result.times, odometry));
-    total_ms.push_back(result.times.total_ms);
-    if (mcap) mcap->write_frame(scan, pose, result, pipeline->static_map());
-    if (filtered) {
-      filtered->hold(index, scan);
-      filtered->write_released(pipeline->dynamic_filter());
-    }
-    if (progress) print_progress(index + 1, input.size(), start);
   }
-  std::signal(SIGINT, previous_handler);
+  status.scans_read = input.read();
+  status.scans_skipped_unreadable = input.unreadable();
   if (total_ms.empty()) throw core::InputError(o.input + ": no scans found");
   if (const auto warning = input.warning(); !warning.empty()) {
     std::fprintf(stderr, "ringtrack: warning: %s\n", warning.c_str());
@@ -528,15 +618,14 @@ void run(const RunOptions& o) {
     plotted = run_plot_script("plot_maps.py", {out, out / "maps.png"});
   }
 
+  const std::string signal = StopSignals::signal_name();
   if (const auto summary = input.summary(); !summary.empty())
     std::printf("input            %s\n", summary.c_str());
-  std::printf("scans            %zu%s%s\n", total_ms.size(),
-              pipeline->skipped_scans() == 0
-                  ? ""
-                  : (" (" + std::to_string(pipeline->skipped_scans()) +
-                     " more skipped: stamps older than the scan before)")
-                        .c_str(),
-              g_interrupted.load() ? " (interrupted: the outputs cover these scans only)" : "");
+  std::printf(
+      "scans            %zu%s%s\n", total_ms.size(), skipped_note(status).c_str(),
+      signal.empty()
+          ? ""
+          : (" (interrupted by " + signal + ": the outputs cover these scans only)").c_str());
   std::printf("poses            %s\n", input.pose_summary(o).c_str());
   if (odometry_log) print_odometry_summary(*odometry_log);
   std::printf("deskew           %s\n", input.deskew_summary().c_str());
@@ -545,16 +634,46 @@ void run(const RunOptions& o) {
   std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", eval::quantile(total_ms, 0.5),
               eval::quantile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
   std::printf(
-      "outputs          %s/{tracks.csv,timing.csv,static_map.ply,poses.txt,config.yaml%s%s%s%s}\n",
+      "outputs          "
+      "%s/{tracks.csv,timing.csv,static_map.ply,poses.txt,config.yaml,run.json%s%s%s%s}\n",
       o.out.c_str(), odometry ? ",odometry.csv" : "", raw_map ? ",raw_map.ply" : "",
-      plotted ? ",maps.png" : "",
-      o.filtered_scans ? ",filtered/" : "");
+      plotted ? ",maps.png" : "", o.filtered_scans ? ",filtered/" : "");
   if (mcap) {
     std::printf("mcap             %s (%llu messages, %u chunks, %.1f MB)\n", o.mcap.c_str(),
                 static_cast<unsigned long long>(mcap->mcap_stats().messages),
                 mcap->mcap_stats().chunks,
                 static_cast<double>(mcap->mcap_stats().file_bytes) / 1e6);
   }
+}
+
+void run(const RunOptions& o) {
+  // For the whole command: a signal while the maps are written still lets them finish.
+  const StopSignals stop_signals;
+  const bool odometry = use_odometry(o.odometry, o.input, o.source.format, o.poses);
+  core::Config config = o.config.load();
+  if (odometry && o.no_deskew) config.odometry.deskew = false;
+  io::RunStatusFile status_file(fs::path(o.out) / "run.json", new_run_status("run", o.input));
+  io::RunStatus& status = status_file.status();
+  SkipWarnings warnings(o.input);
+  RunInput input(o, odometry, config.odometry.deskew,
+                 [&status, &warnings](std::uint64_t index, const std::string& error) {
+                   ++status.scans_skipped_unreadable;
+                   status.add_skipped(index, "unreadable: " + error);
+                   warnings.warn(index, "unreadable, skipped: " + error);
+                 });
+
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) throw core::InputError(o.out + ": cannot create the output folder: " + ec.message());
+  // From here on the folder holds outputs: run.json says whether they are whole.
+  status_file.start();
+  try {
+    run_into(o, config, odometry, status, warnings, input);
+  } catch (const std::exception& e) {
+    status_file.fail(e.what());
+    throw;
+  }
+  status_file.finish(StopSignals::signal_name());
 }
 
 }  // namespace
@@ -568,18 +687,12 @@ void register_run(CLI::App& app) {
          "sequence folder or folder of organized PCD files (docs/formats.md), .pcap/.pcapng, "
          ".bag, rosbag2 folder (sqlite3 or mcap), .mcap, or udp://HOST:PORT (docs/inputs.md)")
       ->required();
-  cmd->add_option(
-      "--format", o->format,
-      "input format: auto (from the name and contents), pcap, udp, rosbag1, rosbag2 (mcap)");
-  cmd->add_option("--topic", o->topic, "bag topic (default: the first supported one)");
-  cmd->add_option(
-      "--sensor", o->sensor,
-      "sensor model when the packets do not say it: vlp16 | vlp32c | hdl32e | "
-      "Pandar40P | Pandar64 | PandarQT64 | PandarXT16 | PandarXT32 (ringtrack sensors)");
-  cmd->add_option("--calibration", o->calibration,
-                  "Hesai: the sensor's angle-correction CSV (channel, elevation, azimuth)");
-  cmd->add_option("--metadata", o->metadata,
-                  "Ouster: the sensor's metadata JSON (beam angles, data format)");
+  o->source.add_to(*cmd);
+  cmd->add_option("--on-bad-scan", o->on_bad_scan,
+                  "a scan that cannot be read or decoded (a truncated PCD, a corrupt bag "
+                  "message): skip it (counted in the summary and run.json) or stop with an error")
+      ->check(CLI::IsMember({"skip", "stop"}))
+      ->capture_default_str();
   cmd->add_option("--out", o->out, "output folder (created)")->required();
   cmd->add_option("--poses", o->poses,
                   "sensor poses (sensor in world; replaces a sequence's poses.txt)")

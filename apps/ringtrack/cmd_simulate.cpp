@@ -15,6 +15,7 @@
 #include "ringtrack/io/sequence.hpp"
 #include "ringtrack/sim/scenario_file.hpp"
 #include "ringtrack/sim/simulator.hpp"
+#include "stop_signals.hpp"
 
 namespace ringtrack::cli {
 namespace {
@@ -40,6 +41,9 @@ void list_scenarios() {
   }
 }
 
+void simulate_into(const SimulateOptions& o, const sim::Scenario& scenario,
+                   sim::Simulator& simulator, io::SequenceWriter& writer, io::RunStatus& status);
+
 void run_simulate(const SimulateOptions& o) {
   if (o.list) {
     list_scenarios();
@@ -56,6 +60,8 @@ void run_simulate(const SimulateOptions& o) {
   }
   if (!o.sensor.empty()) scenario.sensor.model = o.sensor;
   sim::Simulator simulator(scenario, o.seed);
+  // Ctrl-C or SIGTERM ends the sequence after the scan at hand, as a complete shorter sequence.
+  const StopSignals stop_signals;
 
   io::SequenceMeta meta =
       io::SequenceMeta::for_sensor(simulator.model(), simulator.model().columns());
@@ -67,6 +73,21 @@ void run_simulate(const SimulateOptions& o) {
   io::SequenceWriteOptions wo;
   wo.overwrite = o.overwrite;
   io::SequenceWriter writer(o.out, meta, wo);
+  // After the writer claimed the folder (it refuses one holding another sequence).
+  io::RunStatusFile status_file(std::filesystem::path(o.out) / "run.json",
+                                new_run_status("simulate", o.scenario));
+  status_file.start();
+  try {
+    simulate_into(o, scenario, simulator, writer, status_file.status());
+  } catch (const std::exception& e) {
+    status_file.fail(e.what());
+    throw;
+  }
+  status_file.finish(StopSignals::signal_name());
+}
+
+void simulate_into(const SimulateOptions& o, const sim::Scenario& scenario,
+                   sim::Simulator& simulator, io::SequenceWriter& writer, io::RunStatus& status) {
   {
     // The effective scenario beside the output, so a run can be repeated from the folder alone.
     // Scripted actors go beside it as trajectories.csv.
@@ -89,7 +110,9 @@ void run_simulate(const SimulateOptions& o) {
   std::vector<io::ObjectRow> rows;
   std::uint64_t seen = 0;
   for (std::int64_t k = 0; k < n; ++k) {
+    if (StopSignals::requested()) break;
     simulator.next(scan);
+    ++status.scans_read;
     rows.clear();
     for (const auto& t : scan.objects) {
       // scan and stamp are set by the writer from the scan itself
@@ -97,6 +120,7 @@ void run_simulate(const SimulateOptions& o) {
       seen += t.hit_points > 0 ? 1 : 0;
     }
     writer.add_scan(scan.scan, scan.labels, scan.pose, rows);
+    ++status.scans_processed;
     if (moving) {
       // The trajectory at 100 Hz between scans, for motion compensation.
       const std::int64_t next_stamp = simulator.scan_stamp_ns(k + 1);
@@ -106,10 +130,11 @@ void run_simulate(const SimulateOptions& o) {
     }
   }
   writer.finish();
-  std::cout << "simulated " << n << " scans of scenario '" << scenario.name << "' ("
+  const std::string signal = StopSignals::signal_name();
+  std::cout << "simulated " << writer.size() << " scans of scenario '" << scenario.name << "' ("
             << (moving ? "moving" : "static") << " sensor, seed " << o.seed << ", "
             << simulator.actors().size() << " objects, " << seen << " object observations) into "
-            << o.out << "\n";
+            << o.out << (signal.empty() ? "" : " (stopped by " + signal + ")") << "\n";
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 #include <vector>
 
 #include "ringtrack/core/config.hpp"
+#include "ringtrack/io/run_status.hpp"
+#include "ringtrack/io/scan_source.hpp"
 
 namespace ringtrack::cli {
 
@@ -19,6 +21,37 @@ struct ConfigOptions {
   /// Defaults, then the file, then each --set in order; throws core::ConfigError.
   [[nodiscard]] core::Config load() const;
 };
+
+/// The input and decoder options `run` and `convert` share (docs/inputs.md): one definition, so
+/// whatever converts also runs.
+struct InputOptions {
+  std::string format{"auto"};
+  std::string topic;
+  std::string model;
+  std::string calibration;
+  std::string metadata;
+  std::string return_selection{"auto"};
+  std::string time_source{"host"};
+  std::string ring_field{"ring"};
+  double cut_azimuth_deg{0.0};
+  double scan_rate_hz{10.0};
+  int port{2368};
+  bool keep_partial{false};
+
+  /// Adds --format, --topic, --model/--sensor, --calibration, --metadata, --return,
+  /// --cut-azimuth, --scan-rate, --time-source, --port, --ring-field and --keep-partial.
+  void add_to(CLI::App& command);
+  /// The source options they describe; throws core::ConfigError naming a bad value.
+  [[nodiscard]] io::ScanSourceOptions source_options() const;
+};
+
+/// Keeps the command line (program name first) for run.json; called once by main().
+void set_command_line(int argc, char** argv);
+/// A run.json status for `command` reading `input`: its command line and ringtrack's version.
+io::RunStatus new_run_status(const std::string& command, const std::string& input);
+/// Flushes standard output and throws core::Error when anything written to it was lost (a full
+/// disk, /dev/full, a closed pipe): such a command must not exit 0.
+void check_stdout();
 
 void register_dump_config(CLI::App& app);
 void register_demo(CLI::App& app);

@@ -22,15 +22,24 @@ int main(int argc, char** argv) {
   ringtrack::cli::register_benchmark(app);
   ringtrack::cli::register_sensors(app);
   ringtrack::cli::register_tune(app);
+  ringtrack::cli::set_command_line(argc, argv);
   try {
     app.parse(argc, argv);
     // Output that could not be written (a full disk, /dev/full) must not end in exit 0; the
     // stream reports the failure only once flushed. (Its cause, errno of whichever write failed
     // first, is gone by then.)
-    std::cout.flush();
-    if (!std::cout) throw ringtrack::core::Error("cannot write to standard output");
+    ringtrack::cli::check_stdout();
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    const int code = app.exit(e);  // --help and --version print here and return 0
+    if (code == 0) {
+      try {
+        ringtrack::cli::check_stdout();
+      } catch (const ringtrack::core::Error& error) {
+        std::cerr << "ringtrack: error: " << error.what() << "\n";
+        return 1;
+      }
+    }
+    return code;
   } catch (const ringtrack::core::Error& e) {
     std::cerr << "ringtrack: error: " << e.what() << "\n";
     return 1;

@@ -55,9 +55,14 @@ testing::CommandResult* BenchmarkCli::result_ = nullptr;
 TEST_F(BenchmarkCli, WritesReportTimingAndJson) {
   ASSERT_EQ(result_->exit_code, 0) << result_->err;
   const fs::path out = *dir_ / "bench";
-  for (const char* f : {"report.md", "results.json", "timing.csv", "config.yaml"}) {
+  for (const char* f : {"report.md", "results.json", "timing.csv", "config.yaml", "run.json"}) {
     EXPECT_TRUE(fs::is_regular_file(out / f)) << f;
   }
+  // Issue 16: the folder says its outputs are whole.
+  const auto status = nlohmann::json::parse(read(out / "run.json"));
+  EXPECT_EQ(status["complete"], true);
+  EXPECT_EQ(status["command"], "benchmark");
+  EXPECT_EQ(status["scans"]["processed"], 4 * 30);
   const auto j = nlohmann::json::parse(result_->out);
   ASSERT_EQ(j["cases"].size(), 4u);  // two scenarios x static/moving
   EXPECT_EQ(j["cases"][0]["scenario"], 1);

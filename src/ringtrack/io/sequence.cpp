@@ -529,13 +529,24 @@ void SequenceReader::open_plain(const fs::path& folder) {
   }
 }
 
+namespace {
+
+bool increasing(const std::vector<std::int64_t>& stamps) {
+  return std::adjacent_find(stamps.begin(), stamps.end(),
+                            [](std::int64_t a, std::int64_t b) { return b <= a; }) == stamps.end();
+}
+
+}  // namespace
+
 void SequenceReader::load_stamps_and_poses(const fs::path& folder) {
   std::error_code ec;
   fs::path stamps_file = options_.stamps;
   if (stamps_file.empty() && fs::exists(folder / "stamps.txt", ec))
     stamps_file = folder / "stamps.txt";
   if (!stamps_file.empty()) {
-    stamps_ = read_stamps(stamps_file);
+    // Stamps that go back (a host clock step) are read as they are: front ends skip such scans
+    // (the pipeline cannot run backwards) rather than refuse the whole folder.
+    stamps_ = read_stamps(stamps_file, /*require_increasing=*/false);
     if (stamps_.size() != paths_.size()) {
       throw core::InputError(stamps_file.string() + ": " + std::to_string(stamps_.size()) +
                              " stamps for " + std::to_string(paths_.size()) +
@@ -555,6 +566,21 @@ void SequenceReader::load_stamps_and_poses(const fs::path& folder) {
     return;
   }
   has_poses_ = true;
+  if (options_.poses_format == PoseFileFormat::kKitti && !increasing(stamps_)) {
+    // One pose per scan in scan order: nothing to interpolate, so stamps that go back (the
+    // scans front ends skip) need no trajectory, which would refuse them.
+    auto poses = read_kitti_poses(poses_file);
+    if (poses.size() != stamps_.size()) {
+      throw core::InputError(poses_file.string() + ": " + std::to_string(poses.size()) +
+                             " KITTI poses for " + std::to_string(stamps_.size()) +
+                             " stamps; expected one pose per stamp");
+    }
+    for (std::size_t i = 0; i < poses.size(); ++i) {
+      poses_[i] = poses[i];
+      poses_[i].stamp_ns = stamps_[i];
+    }
+    return;
+  }
   const Trajectory trajectory = options_.poses_format == PoseFileFormat::kKitti
                                     ? read_kitti(poses_file, stamps_)
                                     : read_tum(poses_file);

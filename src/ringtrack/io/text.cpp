@@ -164,7 +164,7 @@ std::vector<std::string> read_lines(const std::filesystem::path& path) {
   return lines;
 }
 
-std::vector<std::int64_t> read_stamps(const std::filesystem::path& path) {
+std::vector<std::int64_t> read_stamps(const std::filesystem::path& path, bool require_increasing) {
   const auto lines = read_lines(path);
   std::vector<std::int64_t> stamps;
   for (std::size_t n = 0; n < lines.size(); ++n) {
@@ -180,7 +180,7 @@ std::vector<std::int64_t> read_stamps(const std::filesystem::path& path) {
       throw core::InputError(where + ": expected a stamp in seconds, got '" +
                              std::string(tokens.front()) + "'");
     }
-    if (!stamps.empty() && *ns <= stamps.back()) {
+    if (require_increasing && !stamps.empty() && *ns <= stamps.back()) {
       throw core::InputError(where + ": stamp " + format_stamp(*ns) +
                              " does not increase (previous " + format_stamp(stamps.back()) + ")");
     }

@@ -29,8 +29,10 @@ void append_shortest(std::string& out, float value);
 /// naming the file when it cannot be read.
 std::vector<std::string> read_lines(const std::filesystem::path& path);
 /// Reads a stamps file: one stamp in decimal seconds per line, '#' comments and blank lines
-/// ignored, strictly increasing; throws core::InputError naming file:line otherwise.
-std::vector<std::int64_t> read_stamps(const std::filesystem::path& path);
+/// ignored, strictly increasing unless `require_increasing` is false; throws core::InputError
+/// naming file:line otherwise.
+std::vector<std::int64_t> read_stamps(const std::filesystem::path& path,
+                                      bool require_increasing = true);
 /// Reads a whole binary file; throws core::InputError naming the file when it cannot be read.
 std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path);
 

@@ -55,6 +55,11 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   if (tracker_.stamp_ns() != 0 && scan.stamp_ns < tracker_.stamp_ns()) {
     return skip(scan, older_than_previous(scan.stamp_ns, tracker_.stamp_ns()));
   }
+  if (tracker_.stamp_ns() != 0 && scan.stamp_ns == tracker_.stamp_ns()) {
+    return skip(scan, "stamp " + std::to_string(scan.stamp_ns) +
+                          " ns repeats the previous scan's (a repeated message or a clock that "
+                          "stood still); skipped");
+  }
   if (scan.rings() != model_.rings()) {
     throw core::InputError("pipeline: the scan at " + std::to_string(scan.stamp_ns) + " ns has " +
                            std::to_string(scan.rings()) + " rings, the sensor model " +

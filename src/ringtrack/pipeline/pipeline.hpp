@@ -43,10 +43,11 @@ struct FrameResult {
   std::size_t retroactive_points{0};                 ///< removed from earlier scans in the log
   StageTimes times;
   core::Pose pose;  ///< the sensor pose the scan was processed with (given or estimated)
-  /// The scan was not processed (its stamp is older than the previous scan's: a host clock step
-  /// or a corrupt stamp); the spans are empty and skip_reason says why.
+  /// The scan was not processed (its stamp is not after the previous scan's: a host clock step,
+  /// a corrupt stamp or a repeated scan); the spans are empty and skip_reason says why.
   bool skipped{false};
-  std::string skip_reason;  ///< e.g. "stamp 1000 ns is 0.000000500 s older than the previous 1500 ns"
+  std::string
+      skip_reason;  ///< e.g. "stamp 1000 ns is 0.000000500 s older than the previous 1500 ns"
 };
 
 /// Runs the stages in order on each scan; one instance per sensor stream.
@@ -55,9 +56,10 @@ class Pipeline {
   /// The model is the sensor's that took the scans: the free-space tests follow its beams.
   Pipeline(const core::Config& config, core::SensorModel model);
 
-  /// Processes one scan taken at `pose` (sensor in world). A scan older than the previous
-  /// processed one is skipped, not processed (the tracker's filters cannot run backwards): the
-  /// result says so and why, and skipped_scans() counts it; later scans continue the tracks.
+  /// Processes one scan taken at `pose` (sensor in world). A scan whose stamp is not after the
+  /// previous processed one's is skipped, not processed (the tracker's filters cannot run
+  /// backwards, and a repeated scan would count as a second observation): the result says so
+  /// and why, and skipped_scans() counts it; later scans continue the tracks.
   const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& pose);
   /// Processes a scan of a sensor without a pose source: the odometry (config.odometry) estimates
   /// its pose and motion-compensates the scan in place, leaving out the points of the objects
@@ -71,7 +73,7 @@ class Pipeline {
   [[nodiscard]] const odometry::OdometryResult& odometry_result() const { return odometry_result_; }
   /// The odometry (nullptr before the first process_with_odometry()).
   [[nodiscard]] const odometry::Odometry* odometry() const { return odometry_.get(); }
-  /// Scans skipped so far because their stamp was older than the previous scan's.
+  /// Scans skipped so far because their stamp was not after the previous scan's.
   [[nodiscard]] std::uint64_t skipped_scans() const { return skipped_scans_; }
   /// Moves the scans still held back by the dynamic-object filter into the static map.
   void finish();

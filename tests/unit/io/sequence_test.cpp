@@ -132,6 +132,39 @@ TEST(Sequence, PosesAreInterpolatedToScanStamps) {
   EXPECT_EQ(kitti.pose(2).stamp_ns, kStart + 2 * kPeriod);
 }
 
+// Issue 16: a stamps.txt that steps back (a host clock step while recording) is read as it is,
+// so front ends can skip that scan instead of refusing the folder; poses still come per scan.
+TEST(Sequence, StampsThatGoBackAreReadWithTheirPoses) {
+  test::TempDir dir;
+  const fs::path folder = dir / "seq";
+  write_demo_sequence(folder, 4);
+  test::write_text(folder / "stamps.txt", "# stepped back at scan 2\n1.0\n1.1\n1.05\n1.3\n");
+  {
+    SequenceReader reader(folder);  // poses.txt (TUM) interpolated at each stamp
+    ASSERT_EQ(reader.size(), 4u);
+    EXPECT_EQ(reader.stamp_ns(2), 1'050'000'000);
+    EXPECT_EQ(reader.pose(2).stamp_ns, 1'050'000'000);
+    EXPECT_TRUE(reader.pose(2).translation.isApprox(Eigen::Vector3d(0.05, 0, 2.5), 1e-9));
+    SequenceScan s;
+    for (int k = 0; k < 3; ++k) ASSERT_TRUE(reader.next(s));
+    EXPECT_EQ(s.scan.stamp_ns, 1'050'000'000);
+  }
+  // KITTI poses: one per scan in order, given the scan's stamp.
+  test::write_text(dir / "kitti.txt",
+                   "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 1 0 1 0 0 0 0 1 0\n1 0 0 2 0 1 0 0 0 0 1 0\n"
+                   "1 0 0 3 0 1 0 0 0 0 1 0\n");
+  SequenceReadOptions options;
+  options.poses = dir / "kitti.txt";
+  options.poses_format = PoseFileFormat::kKitti;
+  SequenceReader kitti(folder, options);
+  EXPECT_EQ(kitti.pose(2).translation.x(), 2.0);
+  EXPECT_EQ(kitti.pose(2).stamp_ns, 1'050'000'000);
+  // Still one stamp per scan.
+  test::write_text(folder / "stamps.txt", "1.0\n1.1\n1.05\n");
+  EXPECT_NE(input_error([&] { SequenceReader r(folder); }).find("3 stamps for 4 scans"),
+            std::string::npos);
+}
+
 TEST(Sequence, WithoutPosesTheSensorStaysAtTheOrigin) {
   test::TempDir dir;
   const auto model = core::SensorModel::vlp16();

@@ -46,9 +46,9 @@ TEST(PipelineInput, RejectsAnInconsistentSensorModel) {
   EXPECT_THROW(Pipeline(core::Config{}, model), core::Error);
 }
 
-// Issue 16: a scan whose stamp goes back (a host clock step, a corrupt bag stamp) aborted the
-// whole run. It is skipped and counted instead, and the run goes on exactly as if the scan had
-// never been there (oracle: a second pipeline that never saw it).
+// Issue 16: a scan whose stamp goes back (a host clock step, a corrupt bag stamp) or repeats
+// aborted the whole run. It is skipped and counted instead, and the run goes on exactly as if the
+// scan had never been there (oracle: a second pipeline that never saw it).
 TEST(PipelineInput, ScanOlderThanThePreviousIsSkippedAndCounted) {
   const auto model = core::SensorModel::vlp16();
   const auto people = sim::render(model, sim::SimpleScene::open_field(4)).scan;
@@ -76,6 +76,14 @@ TEST(PipelineInput, ScanOlderThanThePreviousIsSkippedAndCounted) {
             "clock step or a corrupt stamp); skipped");
   EXPECT_TRUE(skipped.hypotheses.empty());
   EXPECT_EQ(with_step.skipped_scans(), 1u);
+  // A scan with the previous scan's stamp (a repeated message) would count as a second
+  // observation at the same instant: skipped too.
+  const auto& repeated = with_step.process(at(3 * second), pose(3 * second));
+  EXPECT_TRUE(repeated.skipped);
+  EXPECT_EQ(repeated.skip_reason,
+            "stamp 3000000000 ns repeats the previous scan's (a repeated message or a clock that "
+            "stood still); skipped");
+  EXPECT_EQ(with_step.skipped_scans(), 2u);
   const auto& after = with_step.process(at(4 * second), pose(4 * second));
   EXPECT_FALSE(after.skipped);
   EXPECT_TRUE(after.skip_reason.empty());

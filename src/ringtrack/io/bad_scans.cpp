@@ -1,0 +1,53 @@
+#include "ringtrack/io/bad_scans.hpp"
+
+#include <utility>
+
+#include "ringtrack/core/error.hpp"
+#include "ringtrack/io/rosbag_source.hpp"
+
+namespace ringtrack::io {
+namespace {
+
+// Messages a source has taken from its container; nullopt for sources that cannot tell, which
+// are never read past an error.
+std::optional<std::uint64_t> messages_taken(const ScanSource& source) {
+  if (const auto* bag = dynamic_cast<const RosbagScanSource*>(&source)) {
+    return bag->stats().messages;
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+BadScanPolicy parse_bad_scan_policy(const std::string& name) {
+  if (name == "skip") return BadScanPolicy::kSkip;
+  if (name == "stop") return BadScanPolicy::kStop;
+  throw core::ConfigError("--on-bad-scan '" + name + "': expected skip or stop");
+}
+
+ScanReader::ScanReader(ScanSource& source, BadScanPolicy policy, SkipHandler on_skip)
+    : source_(source), policy_(policy), on_skip_(std::move(on_skip)) {}
+
+std::optional<core::OrganizedScan> ScanReader::next(std::uint64_t& index) {
+  for (;;) {
+    const auto before = messages_taken(source_);
+    try {
+      auto scan = source_.next();
+      if (scan) index = next_index_++;
+      return scan;
+    } catch (const core::InputError& e) {
+      // Skippable only when the failing message was taken (the bag source counts a message
+      // before decoding it), so the next call starts at the message after it.
+      const auto after = messages_taken(source_);
+      if (policy_ == BadScanPolicy::kStop || !before || !after || *after <= *before) {
+        ++next_index_;  // the scan that stops the reading was taken too
+        throw;
+      }
+      ++skipped_;
+      const std::uint64_t bad = next_index_++;
+      if (on_skip_) on_skip_(bad, e.what());
+    }
+  }
+}
+
+}  // namespace ringtrack::io
