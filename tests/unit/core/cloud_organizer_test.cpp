@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -241,6 +243,52 @@ TEST(CloudOrganizer, MeasuresTheSensorOnTheCloudWhenNoModelIsGiven) {
   EXPECT_EQ(m16.columns(), vlp16.columns());
   for (int r = 0; r < 16; ++r)
     EXPECT_NEAR(m16.elevation_rad[r], vlp16.elevation_rad[r], 0.05 * kDeg);
+}
+
+TEST(CloudOrganizer, MergedCloudsOfTwoSensorsLoseTheSecond) {
+  // docs/inputs.md, "Merged multi-sensor clouds": a VLP-16 scan of the demo scene merged with a
+  // second VLP-16's scan whose sensor sits 0.4 m higher, turned by 90 degrees, organized with the
+  // VLP-16 model at the first sensor. Its points mostly fall between the rings or land on them
+  // as foreign ranges; the first sensor's points are only lost where a second one is nearer.
+  const SensorModel model = SensorModel::vlp16();
+  const auto first = sim::render(model, sim::SimpleScene::demo()).scan;
+  const auto second = sim::render(model, sim::SimpleScene::hard_wall()).scan;
+  UnorganizedCloud merged = flatten_scan(first);
+  const std::size_t n1 = merged.size();
+  const Eigen::Matrix3f turn =
+      Eigen::AngleAxisf(static_cast<float>(std::numbers::pi / 2), Eigen::Vector3f::UnitZ())
+          .toRotationMatrix();
+  const UnorganizedCloud other = flatten_scan(second);
+  for (std::size_t i = 0; i < other.size(); ++i) {
+    merged.xyz.push_back(turn * other.xyz[i] + Eigen::Vector3f(0, 0, 0.4f));
+    merged.intensity.push_back(1000.0f);  // marks the second sensor's points
+    merged.time_ns.push_back(other.time_ns[i]);
+  }
+  const std::size_t n2 = other.size();
+  const OrganizedCloud o = CloudOrganizer(model).organize(merged);
+  std::size_t kept_second = 0;
+  std::size_t kept_first = 0;
+  for (std::size_t i = 0; i < o.scan.size(); ++i) {
+    if (!o.scan.valid(i)) continue;
+    (o.scan.intensity(i) == 1000.0f ? kept_second : kept_first) += 1;
+  }
+  const double share_first = static_cast<double>(kept_first) / static_cast<double>(n1);
+  const double share_second = static_cast<double>(kept_second) / static_cast<double>(n2);
+  const double between = static_cast<double>(o.stats.between_rings) / static_cast<double>(n2);
+  std::printf(
+      "merged: first sensor %zu points, %.1f %% kept; second %zu points, %.1f %% kept as foreign "
+      "ranges, %.1f %% dropped between rings, %llu collided in all; elevation error median "
+      "%.3f p95 %.3f deg\n",
+      n1, 100.0 * share_first, n2, 100.0 * share_second, 100.0 * between,
+      static_cast<unsigned long long>(o.stats.collided), o.stats.median_elevation_error_deg,
+      o.stats.p95_elevation_error_deg);
+  EXPECT_EQ(o.stats.points, n1 + n2);
+  EXPECT_EQ(
+      kept_first + kept_second + o.stats.collided + o.stats.between_rings + o.stats.out_of_range,
+      n1 + n2);
+  EXPECT_GT(o.stats.between_rings, n2 / 4);  // many of the second sensor's points do not fit
+  EXPECT_GT(share_first, 0.5);
+  EXPECT_LT(share_second, 0.75);
 }
 
 TEST(CloudOrganizer, MeasuringNeedsTwoRings) {
