@@ -160,16 +160,21 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
     const int k = static_cast<int>(std::upper_bound(el.begin(), el.end(), e0) - el.begin());
     int ring = -1;
     double residual = std::numeric_limits<double>::infinity();
+    // The elevation from a beam origin dz above the sensor's is e0 - dz * h / (h^2 + z^2) to
+    // first order; its error (under 0.08 degrees at the 0.3 m minimum range, 0.007 at 1 m) is far
+    // below the ring window's distance to the next ring, so it picks the ring and one exact
+    // atan2 gives the residual.
+    const double slope = h / (h * h + z * z);
     for (int r = std::max(0, k - reach_below); r <= std::min(rings - 1, k + reach_above); ++r) {
       const auto u = static_cast<std::size_t>(r);
-      const double e = has_offsets_ ? std::atan2(z - voff[u], h) : e0;
-      const double d = e - el[u];
+      const double d = e0 - voff[u] * slope - el[u];
       if (std::abs(d) < std::abs(residual)) {
         residual = d;
         ring = r;
       }
     }
     const auto ru = static_cast<std::size_t>(ring);
+    if (has_offsets_) residual = std::atan2(z - voff[ru], h) - el[ru];
     if (residual > above_rad_[ru] || -residual > below_rad_[ru]) {
       ++stats.between_rings;
       continue;

@@ -3,9 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <map>
 #include <numbers>
+#include <tuple>
 
 #include "io_test_util.hpp"
 #include "ringtrack/io/pcd.hpp"
@@ -230,6 +234,66 @@ TEST(KittiBin, PointCloud2WithoutRingFieldIsOrganized) {
   const auto m = measured.organize(parsed, "t");
   EXPECT_EQ(m.rings(), 16);
   EXPECT_EQ(measured.model().name, "generic");
+}
+
+TEST(KittiBin, RealVlp16CloudWithoutItsChannelFieldGetsTheChannelsRings) {
+  // nebula's decode of a real dual-return VLP-16 revolution, as an unorganized PCD whose ring
+  // field is called `channel` (so: no ring field). Oracle: every point the organizer keeps sits in
+  // the ring its channel names.
+  const fs::path data = std::getenv("RINGTRACK_TEST_DATA") != nullptr
+                            ? fs::path(std::getenv("RINGTRACK_TEST_DATA"))
+                            : fs::path(RINGTRACK_SOURCE_DIR) / "../shared/data";
+  const auto path = data / "vlp16_indoor_nebula/reference_last_scan.pcd";
+  if (!fs::exists(path)) GTEST_SKIP() << "real VLP-16 test data not found: " << path;
+  const auto bytes = read_file_bytes(path);
+  const PcdHeader header = parse_pcd_header(bytes, path.string());
+  ASSERT_TRUE(pcd_needs_organizer(header, "ring"));
+  const core::UnorganizedCloud cloud = decode_pcd_cloud(bytes, path.string());
+  ASSERT_EQ(cloud.size(), 14831u);
+  PcdReadOptions by_channel;
+  by_channel.organize_columns = 1808;
+  by_channel.ring_field = "channel";
+  by_channel.row_order = PcdRowOrder::kBottomFirst;
+  const auto truth = decode_pcd(bytes, path.string(), by_channel).scan;  // ring = channel
+  std::map<std::tuple<float, float, float>, int> ring_of_point;
+  for (std::size_t i = 0; i < truth.size(); ++i) {
+    if (!truth.valid(i)) continue;
+    const auto p = truth.point(i);
+    ring_of_point[{p.x(), p.y(), p.z()}] = truth.ring_of(i);
+  }
+  core::CloudOrganizerOptions options;
+  options.clockwise = true;
+  options.undo_firing_rotation = true;
+  const auto o = core::CloudOrganizer(core::SensorModel::vlp16(), options).organize(cloud);
+  std::size_t checked = 0;
+  for (std::size_t i = 0; i < o.scan.size(); ++i) {
+    if (!o.scan.valid(i)) continue;
+    const auto p = o.scan.point(i);
+    const auto it = ring_of_point.find({p.x(), p.y(), p.z()});
+    if (it == ring_of_point.end()) continue;  // lost its cell in the channel-based scan
+    ASSERT_EQ(o.scan.ring_of(i), it->second) << "point " << p.transpose();
+    ++checked;
+  }
+  std::printf(
+      "real VLP-16 (dual return): %llu points, %llu in cells, %llu collided, %llu between rings, "
+      "%llu out of range; elevation error median %.3f p95 %.3f max %.3f deg; %zu checked\n",
+      static_cast<unsigned long long>(o.stats.points),
+      static_cast<unsigned long long>(o.stats.organized),
+      static_cast<unsigned long long>(o.stats.collided),
+      static_cast<unsigned long long>(o.stats.between_rings),
+      static_cast<unsigned long long>(o.stats.out_of_range), o.stats.median_elevation_error_deg,
+      o.stats.p95_elevation_error_deg, o.stats.max_elevation_error_deg, checked);
+  EXPECT_EQ(o.stats.between_rings, 0u);
+  EXPECT_GT(checked, o.stats.organized * 9 / 10);
+  // Dual returns: about half the points are the second return of a cell.
+  EXPECT_GT(o.stats.organized, 6000u);
+  // Measured without a model: ring 0 (-15 deg) returns nothing indoors, so 15 rings.
+  const auto measured = core::measure_cloud_sensor(cloud, path.string());
+  std::printf("measured: %d rings, %d columns, lowest %.3f deg, highest %.3f deg\n",
+              measured.rings(), measured.columns(),
+              measured.elevation_rad.front() * 180 / std::numbers::pi,
+              measured.elevation_rad.back() * 180 / std::numbers::pi);
+  EXPECT_GE(measured.rings(), 14);
 }
 
 }  // namespace
