@@ -206,7 +206,7 @@ TEST(KittiBin, PointCloud2WithoutRingFieldIsOrganized) {
   const double step = 2 * std::numbers::pi / columns;
   const double turn_per_us = 2 * std::numbers::pi * model.scan_rate_hz * 1e-6;
   core::OrganizedScan expected(model.rings(), columns);
-  std::vector<test::TestPoint> points;
+  std::vector<::ringtrack::test::TestPoint> points;
   for (int c = 0; c < columns; c += 2) {
     for (int r = 0; r < model.rings(); ++r) {
       const double az = -(c + 0.5) * step - turn_per_us * model.firing_offset_us[r];
@@ -216,9 +216,10 @@ TEST(KittiBin, PointCloud2WithoutRingFieldIsOrganized) {
       points.push_back({p.x(), p.y(), p.z(), static_cast<float>(r), 0, 0.0f});
     }
   }
-  const auto cloud = test::make_xyzirt_cloud(points, 1, static_cast<std::uint32_t>(points.size()),
-                                             5'000'000'000, /*with_ring=*/false);
-  const auto bytes = test::serialize_pointcloud2(cloud, test::RosEncoding::kCdr);
+  const auto cloud = ::ringtrack::test::make_xyzirt_cloud(
+      points, 1, static_cast<std::uint32_t>(points.size()), 5'000'000'000, /*with_ring=*/false);
+  const auto bytes =
+      ::ringtrack::test::serialize_pointcloud2(cloud, ::ringtrack::test::RosEncoding::kCdr);
   const PointCloud2 parsed = parse_pointcloud2(bytes, RosSerialization::kCdr, "t");
   PointCloud2Options options;
   options.model = "vlp16";
