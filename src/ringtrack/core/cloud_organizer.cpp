@@ -111,6 +111,37 @@ CloudOrganizer::CloudOrganizer(SensorModel model, CloudOrganizerOptions options)
   }
 }
 
+bool CloudOrganizer::offsets_fit_better(const UnorganizedCloud& cloud) const {
+  const auto& el = model_.elevation_rad;
+  const auto& voff = model_.vertical_offset_m;
+  const std::size_t n = cloud.size();
+  const std::size_t stride = std::max<std::size_t>(1, n / 4096);
+  double with = 0.0;
+  double without = 0.0;
+  for (std::size_t i = 0; i < n; i += stride) {
+    const Eigen::Vector3f& p = cloud.xyz[i];
+    if (!p.allFinite() || !is_return(p)) continue;
+    const double x = p.x();
+    const double y = p.y();
+    const double z = p.z();
+    const double h = std::sqrt(x * x + y * y);
+    const double e0 = std::atan2(z, h);
+    const double slope = h / (h * h + z * z);  // first order, as in organize()
+    const auto k = static_cast<int>(std::upper_bound(el.begin(), el.end(), e0) - el.begin());
+    const int rings = static_cast<int>(el.size());
+    double best_with = std::numeric_limits<double>::infinity();
+    double best_without = best_with;
+    for (int r = std::max(0, k - 2); r <= std::min(rings - 1, k + 1); ++r) {
+      const auto u = static_cast<std::size_t>(r);
+      best_with = std::min(best_with, std::abs(e0 - voff[u] * slope - el[u]));
+      best_without = std::min(best_without, std::abs(e0 - el[u]));
+    }
+    with += best_with;
+    without += best_without;
+  }
+  return with <= without;
+}
+
 OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
   const std::size_t n = cloud.size();
   if (!cloud.intensity.empty() && cloud.intensity.size() != n) {
@@ -123,12 +154,18 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
   }
   const int rings = model_.rings();
   const auto& el = model_.elevation_rad;
-  const auto& voff = model_.vertical_offset_m;
+  bool offsets = has_offsets_;
+  if (offsets && options_.beam_origins != BeamOrigins::kModel) {
+    offsets = options_.beam_origins == BeamOrigins::kAuto && offsets_fit_better(cloud);
+  }
+  const std::vector<double> no_offsets(offsets ? 0 : el.size(), 0.0);
+  const auto& voff = offsets ? model_.vertical_offset_m : no_offsets;
   OrganizedCloud out;
   out.scan = OrganizedScan(rings, columns_);
   OrganizedScan& scan = out.scan;
   CloudOrganizeStats& stats = out.stats;
   stats.points = n;
+  stats.beam_offsets = offsets;
   const bool timed = !cloud.time_ns.empty();
   constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
   std::vector<std::int64_t> first_ns(timed ? static_cast<std::size_t>(columns_) : 0, kUnset);
@@ -140,8 +177,8 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
   const bool clockwise = options_.clockwise;
   // With beam offsets the nearest ring seen from the sensor origin may not be the nearest seen
   // from the rings' own origins: two more candidates cover offsets up to a ring gap.
-  const int reach_below = has_offsets_ ? 2 : 1;
-  const int reach_above = has_offsets_ ? 1 : 0;
+  const int reach_below = offsets ? 2 : 1;
+  const int reach_above = offsets ? 1 : 0;
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3f& p = cloud.xyz[i];
     if (!p.allFinite()) {
@@ -174,7 +211,7 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
       }
     }
     const auto ru = static_cast<std::size_t>(ring);
-    if (has_offsets_) residual = std::atan2(z - voff[ru], h) - el[ru];
+    if (offsets) residual = std::atan2(z - voff[ru], h) - el[ru];
     if (residual > above_rad_[ru] || -residual > below_rad_[ru]) {
       ++stats.between_rings;
       continue;

@@ -24,6 +24,13 @@ struct UnorganizedCloud {
   [[nodiscard]] std::size_t size() const { return xyz.size(); }
 };
 
+/// Where the beams of a model with vertical beam offsets (VLP-16) start, for the points of a cloud.
+enum class BeamOrigins : std::uint8_t {
+  kAuto,          ///< per cloud, whichever fits its points better (drivers differ, see below)
+  kModel,         ///< the model's offsets: points as ringtrack's decoder and simulator place them
+  kSensorOrigin,  ///< all at the origin: drivers that ignore the offsets (e.g. tier4/nebula)
+};
+
 /// Column grid and ring window of CloudOrganizer.
 struct CloudOrganizerOptions {
   /// Centre of column 0 (radians, counter-clockwise from +x). Columns are 2*pi / model.columns()
@@ -39,6 +46,9 @@ struct CloudOrganizerOptions {
   /// within this fraction of the gap to the neighbouring ring on its side; farther points are
   /// dropped and counted (between_rings). In (0, 0.5]; 0.5 assigns every point inside the fan.
   double ring_window{0.25};
+  /// Beam origins of models with vertical offsets. kAuto compares the mean elevation residual of
+  /// up to 4096 of the cloud's points under both hypotheses and takes the smaller.
+  BeamOrigins beam_origins{BeamOrigins::kAuto};
 };
 
 /// What organizing one cloud did: where the points went and how well they fit the rings.
@@ -55,6 +65,9 @@ struct CloudOrganizeStats {
   double median_elevation_error_deg{0.0};
   double p95_elevation_error_deg{0.0};  ///< see median_elevation_error_deg
   double max_elevation_error_deg{0.0};  ///< see median_elevation_error_deg
+  /// The model's beam offsets were applied (false: the model has none, or the cloud's points fit
+  /// beams from the sensor origin better).
+  bool beam_offsets{false};
 
   /// Points that were returns (neither non-finite nor at the origin) but hold no cell.
   [[nodiscard]] std::uint64_t dropped() const { return between_rings + collided + out_of_range; }
@@ -104,6 +117,9 @@ class CloudOrganizer {
   std::vector<double> below_rad_;         // per ring: allowed residual below it
   std::vector<double> above_rad_;         // per ring: allowed residual above it
   std::vector<double> column_shift_rad_;  // per ring: added to the point azimuth before binning
+
+  // Whether the cloud's points fit the model's beam offsets better than beams from the origin.
+  [[nodiscard]] bool offsets_fit_better(const UnorganizedCloud& cloud) const;
 };
 
 /// The valid cells of an organized scan as an unorganized cloud, ring by ring (each point's time

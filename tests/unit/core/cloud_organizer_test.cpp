@@ -71,6 +71,7 @@ void expect_recovered(const SensorModel& model, const sim::SimpleScene& scene) {
   EXPECT_EQ(organized.stats.organized, cloud.size());
   EXPECT_EQ(organized.stats.dropped(), 0u);
   EXPECT_LT(organized.stats.max_elevation_error_deg, 1e-3);
+  EXPECT_EQ(organized.stats.beam_offsets, model.name == "VLP-16");  // chosen by the points
   EXPECT_EQ(organized.scan.column_stamp_ns, rendered.scan.column_stamp_ns);
   EXPECT_EQ(organized.scan.stamp_ns, rendered.scan.stamp_ns);
   for (int c = 0; c < model.columns(); ++c) {
@@ -235,14 +236,15 @@ TEST(CloudOrganizer, MeasuresTheSensorOnTheCloudWhenNoModelIsGiven) {
   const OrganizedCloud o = CloudOrganizer(measured).organize(cloud);
   expect_same_cells(rendered.scan, o.scan);
 
-  // A VLP-16 (beam origins off the axis): rings within 0.05 deg, its 1808 columns.
+  // A VLP-16: its 1808 columns; rings within 0.15 deg (seen from the sensor origin, the 11 mm
+  // beam offsets of the outer rings move their ground points at ~6 m by 0.11 deg).
   const SensorModel vlp16 = SensorModel::vlp16();
   auto v = sim::render(vlp16, sim::SimpleScene::demo());
   const SensorModel m16 = measure_cloud_sensor(flatten_scan(v.scan), "vlp16.bin");
   ASSERT_EQ(m16.rings(), 16);
   EXPECT_EQ(m16.columns(), vlp16.columns());
   for (int r = 0; r < 16; ++r)
-    EXPECT_NEAR(m16.elevation_rad[r], vlp16.elevation_rad[r], 0.05 * kDeg);
+    EXPECT_NEAR(m16.elevation_rad[r], vlp16.elevation_rad[r], 0.15 * kDeg);
 }
 
 TEST(CloudOrganizer, MergedCloudsOfTwoSensorsLoseTheSecond) {
