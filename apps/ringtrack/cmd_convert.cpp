@@ -125,10 +125,12 @@ void register_convert(CLI::App& app) {
       "ROS 1 .bag, ROS 2 bag in sqlite3 or MCAP) into a sequence folder of organized PCD scans");
   cmd->add_option(
          "input", options->input,
-         "pcap/pcapng file, udp://HOST:PORT, ROS 1 .bag file, rosbag2 folder, .db3 or .mcap")
+         "pcap/pcapng file, udp://HOST:PORT, ROS 1 .bag file, rosbag2 folder, .db3 or .mcap, "
+         "folder of PCD or KITTI-style .bin files")
       ->required();
   cmd->add_option("--out", options->out, "sequence folder to write")->required();
-  cmd->add_option("--format", options->format, "auto | pcap | udp | bag (ROS 1) | rosbag2");
+  cmd->add_option("--format", options->format,
+                  "auto | pcap | udp | bag (ROS 1) | rosbag2 | folder (PCD or .bin files)");
   cmd->add_option("--model,--sensor", options->model,
                   "vlp16 | vlp32c | hdl32e | Pandar40P | Pandar64 | PandarQT64 | PandarXT16 | "
                   "PandarXT32 (default: from the packets' product byte or Hesai header; point "
