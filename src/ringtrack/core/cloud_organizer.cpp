@@ -244,6 +244,10 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
         ring = r;
       }
     }
+    if (ring < 0) {  // no finite residual (not reachable from finite coordinates)
+      ++stats.between_rings;
+      continue;
+    }
     const auto ru = static_cast<std::size_t>(ring);
     residual = residual_rad(h, z - voff[ru], cos_el[ru], sin_el[ru]);
     if (residual > above_rad_[ru] || -residual > below_rad_[ru]) {
@@ -433,6 +437,14 @@ SensorModel measure_cloud_sensor(const UnorganizedCloud& cloud, const std::strin
                      " ring(s) stand out in the points' elevations, expected at least two); "
                      "name the sensor with --sensor");
   }
+  // No spinning LiDAR has more rings; more peaks are a cloud of something else (and a grid that
+  // could not be allocated).
+  constexpr std::size_t kMaxMeasuredRings = 256;
+  if (peaks.size() > kMaxMeasuredRings) {
+    throw InputError(name + ": cannot measure the ring elevations (" +
+                     std::to_string(peaks.size()) + " stand out, expected at most " +
+                     std::to_string(kMaxMeasuredRings) + "); name the sensor with --sensor");
+  }
   std::vector<double> elevations_deg;
   for (int b : peaks) {
     double w = 0.0;
@@ -475,7 +487,14 @@ SensorModel measure_cloud_sensor(const UnorganizedCloud& cloud, const std::strin
     }
     const auto mid = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
     std::nth_element(gaps.begin(), mid, gaps.end());
-    columns = static_cast<int>(std::clamp(std::lround(kTwoPi / *mid), 8L, 100'000L));
+    const long measured = std::lround(kTwoPi / *mid);
+    if (measured > 16'384) {
+      throw InputError(name + ": cannot measure the column width (neighbouring points " +
+                       std::to_string(*mid * kRadToDeg) +
+                       " degrees apart, finer than any spinning LiDAR); name the sensor with "
+                       "--sensor");
+    }
+    columns = static_cast<int>(std::max(measured, 8L));
   }
   // Refine each ring to the mean elevation of the points it gathers.
   constexpr double kMeasuredMaxRangeM = 200.0;
