@@ -48,7 +48,10 @@ TEST(BinFolderCli, RunAndConvertReadAFolderOfBinFiles) {
   // Without --sensor: measured on the first file.
   r = run_command(kCli + " convert " + bins.string() + " --out " + dir + "/measured");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.err.find("3 scan files; organized 3 clouds"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("3 scan files; sensor measured on 000000.bin: 16 rings ("),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(" columns; organized 3 clouds"), std::string::npos) << r.err;
   EXPECT_EQ(io::SequenceReader(dir + "/measured").meta().sensor, "generic");
   fs::remove_all(dir);
 }

@@ -484,6 +484,13 @@ void SequenceReader::open_plain(const fs::path& folder) {
     } else {
       sensor_ =
           core::measure_cloud_sensor(*first.cloud, paths_.front().string(), options_.scan_rate_hz);
+      std::string range;
+      append_fixed(range, sensor_.elevation_rad.front() * kRadToDeg, 3);
+      range += "..";
+      append_fixed(range, sensor_.elevation_rad.back() * kRadToDeg, 3);
+      measured_sensor_ = "sensor measured on " + paths_.front().filename().string() + ": " +
+                         std::to_string(sensor_.rings()) + " rings (" + range + " deg), " +
+                         std::to_string(sensor_.columns()) + " columns";
     }
     meta_ = SequenceMeta::for_sensor(sensor_, sensor_.columns());
     meta_.scans = paths_.size();
@@ -522,7 +529,9 @@ SequenceReader::ScanFile SequenceReader::read_scan_file(const fs::path& path) co
 }
 
 std::string SequenceReader::summary() const {
-  return organize_totals_.clouds > 0 ? organize_totals_.summary() : std::string();
+  if (organize_totals_.clouds == 0) return {};
+  return measured_sensor_.empty() ? organize_totals_.summary()
+                                  : measured_sensor_ + "; " + organize_totals_.summary();
 }
 
 void SequenceReader::load_stamps_and_poses(const fs::path& folder) {

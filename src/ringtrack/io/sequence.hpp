@@ -168,7 +168,8 @@ class SequenceReader {
   [[nodiscard]] const core::CloudOrganizeTotals& organize_totals() const {
     return organize_totals_;
   }
-  /// organize_totals() as one line, "" when no cloud without rings was read.
+  /// organize_totals() as one line (after the measured sensor's rings and columns when it was
+  /// measured), "" when no cloud without rings was read.
   [[nodiscard]] std::string summary() const;
 
  private:
@@ -194,6 +195,7 @@ class SequenceReader {
   std::size_t next_{0};
   mutable std::optional<core::CloudOrganizer> organizer_;  // built at the first cloud
   mutable core::CloudOrganizeTotals organize_totals_;
+  std::string measured_sensor_;  // how the sensor was measured on the first cloud, or ""
 };
 
 /// Per-ring elevations measured on an organized scan (core/cloud_organizer.hpp).
