@@ -1,5 +1,6 @@
 #include "ringtrack/io/scan_source.hpp"
 
+#include <cctype>
 #include <filesystem>
 
 #include "ringtrack/core/error.hpp"
@@ -33,6 +34,23 @@ ScanInputFormat parse_scan_input_format(const std::string& name) {
                           "': expected auto, pcap, udp, bag (ROS 1), rosbag2, mcap or folder");
 }
 
+namespace {
+
+// A sequence folder, or a folder holding at least one .pcd or .bin file.
+bool is_scan_folder(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return false;
+  if (fs::exists(path / "sequence.yaml", ec)) return true;
+  for (const auto& entry : fs::directory_iterator(path, ec)) {
+    std::string ext = entry.path().extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if ((ext == ".pcd" || ext == ".bin") && entry.is_regular_file(ec)) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
 ScanInputFormat guess_scan_input_format(const std::string& input) {
   if (input.rfind("udp://", 0) == 0) return ScanInputFormat::kUdp;
   const fs::path path(input);
@@ -43,7 +61,7 @@ ScanInputFormat guess_scan_input_format(const std::string& input) {
   if (is_rosbag1_file(path) || ext == ".bag") return ScanInputFormat::kRosbag1;
   if (is_mcap_bag(path)) return ScanInputFormat::kRosbag2;  // by its magic, whatever the name
   if (is_rosbag2_path(path)) return ScanInputFormat::kRosbag2;
-  if (fs::is_directory(path, ec)) return ScanInputFormat::kFolder;
+  if (is_scan_folder(path)) return ScanInputFormat::kFolder;
   throw core::InputError(input +
                          ": cannot tell the input format (expected udp://HOST:PORT, a .pcap/"
                          ".pcapng file, a ROS 1 .bag file, a rosbag2 folder or a folder of "

@@ -162,6 +162,11 @@ TEST(KittiBin, FoldersAreRecognisedAndOpenedAsSources) {
   const auto scans = write_bin_folder(dir / "bins");
   EXPECT_EQ(guess_scan_input_format((dir / "bins").string()), ScanInputFormat::kFolder);
   EXPECT_EQ(parse_scan_input_format("bin"), ScanInputFormat::kFolder);
+  fs::create_directories(dir / "empty");
+  EXPECT_NE(input_error([&] {
+              (void)guess_scan_input_format((dir / "empty").string());
+            }).find("a folder of PCD or .bin files"),
+            std::string::npos);
   ScanSourceOptions options;
   options.velodyne.decoder.model = "vlp16";
   auto source = open_scan_source((dir / "bins").string(), options);
