@@ -49,6 +49,36 @@ double residual_rad(double h, double z, double cos_el, double sin_el) {
   return t * (1.0 - t2 * (1.0 / 3.0 - t2 * (1.0 / 5.0 - t2 / 7.0)));
 }
 
+// The ring nearest to a point (h horizontal distance, z height) seen from each ring's own beam
+// origin, and the signed residual (within 1e-5 rad); ring -1 when none is finite. Beam origins
+// between min_off and max_off metres above the sensor shift the elevation seen from the sensor
+// origin by at most off / h: only the rings inside that span (and one beyond) are candidates,
+// which is two for models without offsets and a few for the VLP-16 (11 mm), more near a sensor
+// whose beams start 0.2 m up.
+std::pair<int, double> nearest_ring(double h, double z, const std::vector<double>& el,
+                                    const std::vector<double>& voff, double min_off,
+                                    double max_off) {
+  const int rings = static_cast<int>(el.size());
+  const double lo_e = fast_atan2(z - max_off, h);
+  const double hi_e = max_off == min_off ? lo_e : fast_atan2(z - min_off, h);
+  const int lo = static_cast<int>(std::upper_bound(el.begin(), el.end(), lo_e) - el.begin()) - 1;
+  const int hi = static_cast<int>(std::upper_bound(el.begin(), el.end(), hi_e) - el.begin());
+  int ring = -1;
+  double residual = std::numeric_limits<double>::infinity();
+  for (int r = std::max(0, lo); r <= std::min(rings - 1, hi); ++r) {
+    const auto u = static_cast<std::size_t>(r);
+    const double e = voff[u] == max_off   ? lo_e
+                     : voff[u] == min_off ? hi_e
+                                          : fast_atan2(z - voff[u], h);
+    const double d = e - el[u];
+    if (std::abs(d) < std::abs(residual)) {
+      residual = d;
+      ring = r;
+    }
+  }
+  return {ring, residual};
+}
+
 bool is_return(const Eigen::Vector3f& p) {
   return p.x() != 0.0f || p.y() != 0.0f || p.z() != 0.0f;
 }
@@ -142,6 +172,9 @@ CloudOrganizer::CloudOrganizer(SensorModel model, CloudOrganizerOptions options)
 bool CloudOrganizer::offsets_fit_better(const UnorganizedCloud& cloud) const {
   const auto& el = model_.elevation_rad;
   const auto& voff = model_.vertical_offset_m;
+  const std::vector<double> zeros(voff.size(), 0.0);
+  const double min_off = std::min(0.0, *std::min_element(voff.begin(), voff.end()));
+  const double max_off = std::max(0.0, *std::max_element(voff.begin(), voff.end()));
   const std::size_t n = cloud.size();
   const std::size_t stride = std::max<std::size_t>(1, n / 4096);
   double with = 0.0;
@@ -153,17 +186,8 @@ bool CloudOrganizer::offsets_fit_better(const UnorganizedCloud& cloud) const {
     const double y = p.y();
     const double z = p.z();
     const double h = std::sqrt(x * x + y * y);
-    const double e0 = fast_atan2(z, h);
-    const double slope = h / (h * h + z * z);  // first order, as in organize()
-    const auto k = static_cast<int>(std::upper_bound(el.begin(), el.end(), e0) - el.begin());
-    const int rings = static_cast<int>(el.size());
-    double best_with = std::numeric_limits<double>::infinity();
-    double best_without = best_with;
-    for (int r = std::max(0, k - 2); r <= std::min(rings - 1, k + 1); ++r) {
-      const auto u = static_cast<std::size_t>(r);
-      best_with = std::min(best_with, std::abs(e0 - voff[u] * slope - el[u]));
-      best_without = std::min(best_without, std::abs(e0 - el[u]));
-    }
+    const double best_with = std::abs(nearest_ring(h, z, el, voff, min_off, max_off).second);
+    const double best_without = std::abs(nearest_ring(h, z, el, zeros, 0.0, 0.0).second);
     with += best_with;
     without += best_without;
   }
@@ -209,10 +233,9 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
   const double max_range = model_.max_range_m;
   const double first = options_.first_column_azimuth_rad;
   const bool clockwise = options_.clockwise;
-  // With beam offsets the nearest ring seen from the sensor origin may not be the nearest seen
-  // from the rings' own origins: two more candidates cover offsets up to a ring gap.
-  const int reach_below = offsets ? 2 : 1;
-  const int reach_above = offsets ? 1 : 0;
+  // The span of the beam origins (the sensor origin included) bounds nearest_ring's candidates.
+  const double min_off = std::min(0.0, *std::min_element(voff.begin(), voff.end()));
+  const double max_off = std::max(0.0, *std::max_element(voff.begin(), voff.end()));
   for (std::size_t i = 0; i < n; ++i) {
     const Eigen::Vector3f& p = cloud.xyz[i];
     if (!p.allFinite()) {
@@ -227,23 +250,7 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
     const double y = p.y();
     const double z = p.z();
     const double h = std::sqrt(x * x + y * y);
-    const double e0 = fast_atan2(z, h);
-    const int k = static_cast<int>(std::upper_bound(el.begin(), el.end(), e0) - el.begin());
-    int ring = -1;
-    double residual = std::numeric_limits<double>::infinity();
-    // The elevation from a beam origin dz above the sensor's is e0 - dz * h / (h^2 + z^2) to
-    // first order; its error (under 0.08 degrees at the 0.3 m minimum range, 0.007 at 1 m) is far
-    // below the ring window's distance to the next ring, so it picks the ring, and the residual
-    // is then measured exactly.
-    const double slope = h / (h * h + z * z);
-    for (int r = std::max(0, k - reach_below); r <= std::min(rings - 1, k + reach_above); ++r) {
-      const auto u = static_cast<std::size_t>(r);
-      const double d = e0 - voff[u] * slope - el[u];
-      if (std::abs(d) < std::abs(residual)) {
-        residual = d;
-        ring = r;
-      }
-    }
+    auto [ring, residual] = nearest_ring(h, z, el, voff, min_off, max_off);
     if (ring < 0) {  // no finite residual (not reachable from finite coordinates)
       ++stats.between_rings;
       continue;
