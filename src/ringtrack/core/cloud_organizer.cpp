@@ -106,11 +106,11 @@ std::string CloudOrganizeTotals::summary() const {
   };
   char line[512];
   std::snprintf(line, sizeof line,
-                "organized %llu clouds: %llu of %llu points in cells (%.2f %%); dropped: %llu "
+                "organized %llu cloud%s: %llu of %llu points in cells (%.2f %%); dropped: %llu "
                 "between rings (%.2f %%), %llu collided (%.2f %%), %llu out of range; skipped: "
                 "%llu NaN, %llu at the origin; elevation error (deg, worst cloud): median %.3f, "
                 "p95 %.3f, max %.3f",
-                static_cast<unsigned long long>(clouds),
+                static_cast<unsigned long long>(clouds), clouds == 1 ? "" : "s",
                 static_cast<unsigned long long>(sum.organized),
                 static_cast<unsigned long long>(sum.points), share(sum.organized),
                 static_cast<unsigned long long>(sum.between_rings), share(sum.between_rings),

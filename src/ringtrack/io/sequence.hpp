@@ -115,8 +115,10 @@ struct SequenceReadOptions {
   /// measured by core::measure_cloud_sensor for clouds without rings).
   std::optional<core::SensorModel> sensor;
   /// Clouds without rings (.bin files, PCD of HEIGHT 1 without a ring field): the column grid.
-  /// Clockwise from +x, as real sensors turn; the files carry no firing times to undo.
-  core::CloudOrganizerOptions organizer{.first_column_azimuth_rad = 0.0, .clockwise = true};
+  /// Clockwise from +x, as real sensors turn, with the firing delays of a named model undone, as
+  /// a driver's points carry them (a measured sensor has none).
+  core::CloudOrganizerOptions organizer{
+      .first_column_azimuth_rad = 0.0, .clockwise = true, .undo_firing_rotation = true};
   /// Plain PCD folders without a stamps file: stamp of scan i = i / scan_rate_hz.
   double scan_rate_hz{10.0};
   PcdReadOptions pcd;  ///< how the PCD files are read (row order, organizing unorganized clouds)

@@ -105,7 +105,8 @@ TEST(KittiBin, FolderRoundTripRecoversTheScans) {
   const auto scans = write_bin_folder(dir / "bins");
   SequenceReadOptions options;
   options.sensor = core::SensorModel::vlp16();
-  options.organizer.clockwise = false;  // the simulator's columns turn counter-clockwise
+  options.organizer.clockwise = false;             // the simulator's columns turn counter-clockwise
+  options.organizer.undo_firing_rotation = false;  // and all its lasers fire at the column
   SequenceReader reader(dir / "bins", options);
   EXPECT_FALSE(reader.is_sequence());
   EXPECT_EQ(reader.meta().sensor, "vlp16");
@@ -125,6 +126,7 @@ TEST(KittiBin, FolderRoundTripRecoversTheScans) {
   // The default grid turns clockwise: column c of the simulator is column (columns - c) % columns.
   SequenceReadOptions clockwise;
   clockwise.sensor = core::SensorModel::vlp16();
+  clockwise.organizer.undo_firing_rotation = false;
   SequenceReader cw(dir / "bins", clockwise);
   const auto first = cw.read(0).scan;
   const int columns = first.columns();
@@ -173,7 +175,8 @@ TEST(KittiBin, FoldersAreRecognisedAndOpenedAsSources) {
   EXPECT_EQ(source->model().name, "VLP-16");
   std::size_t n = 0;
   while (auto scan = source->next()) {
-    EXPECT_EQ(scan->valid_count(), scans[n].valid_count());
+    // Firing delays undone on the simulator's points (which have none): some share a cell.
+    EXPECT_GT(scan->valid_count(), scans[n].valid_count() * 9 / 10);
     ++n;
   }
   EXPECT_EQ(n, 3u);
@@ -202,6 +205,7 @@ TEST(KittiBin, UnorganizedPcdWithoutRingsIsOrganized) {
   SequenceReadOptions options;
   options.sensor = model;
   options.organizer.clockwise = false;
+  options.organizer.undo_firing_rotation = false;
   SequenceReader reader(dir / "pcd", options);
   expect_recovered(scan, reader.read(0).scan);
   EXPECT_EQ(reader.organize_totals().sum.organized, cloud.size());
