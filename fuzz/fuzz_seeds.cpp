@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <numbers>
 #include <span>
 #include <string>
@@ -13,6 +14,7 @@
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
 #include "ringtrack/io/csv_writers.hpp"
+#include "ringtrack/io/kitti_bin.hpp"
 #include "ringtrack/io/mcap_writer.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/poses.hpp"
@@ -254,6 +256,26 @@ void pcd_seeds(const fs::path& out) {
       "1 0 -0.2 5 0\n0 1 -0.1 5 0\n1 0 0.2 5 1\n-1 0 0.3 5 1\n");
 }
 
+void kitti_bin_seeds(const fs::path& out) {
+  // Two rings 2 degrees apart, 64 columns, a NaN point and a point at the origin; its own
+  // truncated copy.
+  core::UnorganizedCloud cloud;
+  for (int ring = 0; ring < 2; ++ring) {
+    for (int c = 0; c < 64; ++c) {
+      const float a = 0.0982F * static_cast<float>(c);
+      const float z = ring == 0 ? -0.175F : 0.0F;
+      cloud.xyz.emplace_back(5.0F * std::cos(a), 5.0F * std::sin(a), z);
+      cloud.intensity.push_back(static_cast<float>(c));
+    }
+  }
+  cloud.xyz.emplace_back(std::numeric_limits<float>::quiet_NaN(), 0.0F, 0.0F);
+  cloud.xyz.emplace_back(0.0F, 0.0F, 0.0F);
+  cloud.intensity.resize(cloud.xyz.size(), 1.0F);
+  const std::string bin = io::encode_kitti_bin(cloud);
+  put(out / "fuzz_kitti_bin", "two_rings", bin);
+  put(out / "fuzz_kitti_bin", "truncated", bin.substr(0, bin.size() - 5));
+}
+
 void text_seeds(const fs::path& out, const fs::path& source_dir) {
   const fs::path config = out / "fuzz_config";
   put(config, "defaults", core::dump_config(core::Config{}));
@@ -328,6 +350,7 @@ void write_all_seeds(const std::filesystem::path& out, const std::filesystem::pa
   rosbag_seeds(out, scratch);
   mcap_seeds(out, scratch);
   pcd_seeds(out);
+  kitti_bin_seeds(out);
   text_seeds(out, source_dir);
   fs::remove_all(scratch);
 }

@@ -224,6 +224,9 @@ class RunInput {
         read_options.poses_format =
             o.poses_format == "kitti" ? io::PoseFileFormat::kKitti : io::PoseFileFormat::kTum;
       }
+      if (!o.source.model.empty()) {
+        read_options.sensor = core::SensorModel::by_name(o.source.model);
+      }
       sequence_ = std::make_unique<io::SequenceReader>(o.input, read_options);
       if (sequence_->size() == 0) throw core::InputError(o.input + ": no scans found");
       // A plain PCD folder's column times are the reader's guess (the files carry no time, and
@@ -331,7 +334,9 @@ class RunInput {
   /// What the source survived (e.g. a bag cut off), "" when nothing.
   [[nodiscard]] std::string warning() const { return source_ ? source_->warning() : std::string(); }
   /// What the source counted (packets, drops, ...), empty for sequence folders.
-  [[nodiscard]] std::string summary() const { return source_ ? source_->summary() : std::string(); }
+  [[nodiscard]] std::string summary() const {
+    return source_ ? source_->summary() : sequence_->summary();
+  }
   /// Where the poses came from, for the summary.
   [[nodiscard]] std::string pose_summary(const RunOptions& o) const {
     if (odometry_) {

@@ -27,6 +27,9 @@ void list_sensors() {
               "512-2048", 0.3, 250.0,
               "--metadata FILE (the sensor's JSON: beams, columns, profile; docs/ouster.md)");
   std::printf("columns at 10 Hz; name a sensor with --sensor when the data does not say it\n");
+  std::printf(
+      "clouds without rings (.bin folders, unorganized PCD, PointCloud2 without a ring field): "
+      "the --sensor's grid, else a generic sensor measured on the first cloud (docs/inputs.md)\n");
 }
 
 }  // namespace

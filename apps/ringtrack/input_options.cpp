@@ -24,7 +24,7 @@ std::vector<std::string>& stored_command_line() {
 void InputOptions::add_to(CLI::App& command) {
   command.add_option("--format", format,
                      "input format: auto (from the name and contents) | pcap | udp | bag (ROS 1) "
-                     "| rosbag2 (sqlite3 or mcap)");
+                     "| rosbag2 (sqlite3 or mcap) | folder (PCD or KITTI-style .bin files)");
   command.add_option("--topic", topic,
                      "bag topic: velodyne_msgs/VelodyneScan, pandar_msgs/PandarScan or "
                      "sensor_msgs/PointCloud2 (default: the first one with messages)");

@@ -597,6 +597,47 @@ PcdScan decode_pcd(std::span<const std::uint8_t> bytes, const std::string& name,
   return out;
 }
 
+core::UnorganizedCloud decode_pcd_cloud(std::span<const std::uint8_t> bytes,
+                                        const std::string& name) {
+  const PcdHeader h = parse_pcd_header(bytes, name);
+  std::string field_list;
+  for (const auto& f : h.fields) field_list += (field_list.empty() ? "" : " ") + f.name;
+  std::vector<const PcdField*> wanted;
+  for (const char* field : {"x", "y", "z", "intensity"}) {
+    const PcdField* f = h.find(field);
+    if (f == nullptr && field[0] != 'i') {
+      fail(name, std::string("missing field '") + field +
+                     "' (expected fields x y z, optionally intensity; found " + field_list + ")");
+    }
+    if (f != nullptr && f->count != 1) {
+      fail(name, "field '" + f->name + "' has COUNT " + std::to_string(f->count) + ", expected 1");
+    }
+    if (f != nullptr) wanted.push_back(f);
+  }
+  Data data;
+  const auto columns = load_columns(bytes, h, name, wanted, data);
+  const std::size_t n = h.points();
+  core::UnorganizedCloud cloud;
+  cloud.xyz.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    cloud.xyz[i] =
+        Eigen::Vector3f(static_cast<float>(columns[0].at(i)), static_cast<float>(columns[1].at(i)),
+                        static_cast<float>(columns[2].at(i)));
+  }
+  if (wanted.size() > 3) {
+    cloud.intensity.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+      const double v = columns[3].at(i);
+      cloud.intensity[i] = std::isfinite(v) ? static_cast<float>(v) : 0.0f;
+    }
+  }
+  return cloud;
+}
+
+bool pcd_needs_organizer(const PcdHeader& header, const std::string& ring_field) {
+  return header.height <= 1 && header.find(ring_field) == nullptr;
+}
+
 PcdScan read_pcd(const std::filesystem::path& path, const PcdReadOptions& options) {
   const auto bytes = read_file_bytes(path);
   return decode_pcd(bytes, path.string(), options);

@@ -8,6 +8,7 @@
 #include <string_view>
 #include <vector>
 
+#include "ringtrack/core/cloud_organizer.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 
 namespace ringtrack::io {
@@ -80,6 +81,12 @@ PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::strin
 /// expected on malformed, truncated or unorganized input.
 PcdScan decode_pcd(std::span<const std::uint8_t> bytes, const std::string& name,
                    const PcdReadOptions& options = {});
+/// The points of PCD bytes as an unorganized cloud (x y z, intensity when present; every point of
+/// every row, in file order), for clouds without rings; throws core::InputError like decode_pcd.
+core::UnorganizedCloud decode_pcd_cloud(std::span<const std::uint8_t> bytes,
+                                        const std::string& name);
+/// True for a cloud that only core::CloudOrganizer can organize: HEIGHT 1 and no ring field.
+bool pcd_needs_organizer(const PcdHeader& header, const std::string& ring_field);
 /// Reads a PCD file into an organized scan (see decode_pcd).
 PcdScan read_pcd(const std::filesystem::path& path, const PcdReadOptions& options = {});
 

@@ -192,6 +192,61 @@ const core::SensorModel& PointCloud2Organizer::model() const {
   return *model_;
 }
 
+core::OrganizedScan PointCloud2Organizer::organize_ringless(const PointCloud2& cloud,
+                                                            const std::string& where) {
+  const PointField* fx = cloud.find("x");
+  const PointField* fy = cloud.find("y");
+  const PointField* fz = cloud.find("z");
+  const PointField* fi = cloud.find("intensity");
+  const PointField* ftime = find_time_field(cloud);
+  core::UnorganizedCloud points;
+  points.stamp_ns = cloud.stamp_ns;
+  const std::uint32_t width = cloud.height == 0 ? 0 : cloud.width;
+  points.xyz.reserve(width);
+  if (fi != nullptr) points.intensity.reserve(width);
+  if (ftime != nullptr) points.time_ns.reserve(width);
+  for (std::uint32_t col = 0; col < width; ++col) {
+    points.xyz.emplace_back(static_cast<float>(cloud.value(*fx, 0, col)),
+                            static_cast<float>(cloud.value(*fy, 0, col)),
+                            static_cast<float>(cloud.value(*fz, 0, col)));
+    if (fi != nullptr) points.intensity.push_back(static_cast<float>(cloud.value(*fi, 0, col)));
+    if (ftime != nullptr) {
+      const double value = cloud.value(*ftime, 0, col);
+      const auto t = point_time_ns(*ftime, value, cloud.stamp_ns);
+      if (!t) {
+        std::ostringstream what;
+        what << where << ": point " << col << " has time field '" << ftime->name << "' = " << value
+             << ", not a time (expected an offset from the header stamp or a stamp within +-4e18 "
+                "ns of the epoch)";
+        throw core::InputError(what.str());
+      }
+      points.time_ns.push_back(*t);
+    }
+  }
+  if (!model_) {
+    model_ = core::measure_cloud_sensor(
+        points, where + ": PointCloud2 without a '" + options_.ring_field + "' field",
+        options_.scan_rate_hz);
+  }
+  if (!ringless_) {
+    // The packet decoder's grid: clockwise columns from the cut azimuth, firing delays undone.
+    core::CloudOrganizerOptions grid;
+    grid.clockwise = true;
+    grid.undo_firing_rotation = true;
+    grid.first_column_azimuth_rad = velodyne_to_ringtrack_azimuth_rad(
+        options_.cut_azimuth_deg + 0.5 * 360.0 / model_->columns());
+    ringless_.emplace(*model_, grid);
+  }
+  core::OrganizedCloud organized = ringless_->organize(points);
+  const core::CloudOrganizeStats& s = organized.stats;
+  ++stats_.clouds;
+  stats_.points += s.points;
+  stats_.empty_points += s.non_finite + s.at_origin;
+  stats_.dropped_points += s.collided;
+  stats_.ringless.add(s);
+  return std::move(organized.scan);
+}
+
 core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
                                                    const std::string& where) {
   const auto fail = [&where](const std::string& what) {
@@ -205,10 +260,7 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
   const PointField* fring = cloud.find(options_.ring_field);
   const PointField* ftime = find_time_field(cloud);
   const PointField* fdistance = cloud.find("distance");
-  if (fring == nullptr && cloud.height <= 1) {
-    fail("is unorganized (height 1) and has no '" + options_.ring_field +
-         "' field: expected a ring field or an organized cloud (one row per ring)");
-  }
+  if (fring == nullptr && cloud.height <= 1) return organize_ringless(cloud, where);
 
   // Rows holding points: none when the width is 0, whatever the height says (fuzz_ros_messages
   // found a cloud of width 0 and 1.6 billion rows that took 11 s to walk doing nothing).

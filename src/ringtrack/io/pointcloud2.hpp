@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "ringtrack/core/cloud_organizer.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/sensor_model.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
@@ -80,6 +81,9 @@ struct PointCloud2Stats {
   std::uint64_t empty_points{0};     ///< NaN / zero points (no return), skipped
   std::uint64_t dropped_points{0};   ///< points that lost their cell to a nearer point
   std::uint64_t bad_ring_points{0};  ///< ring values outside the model's rings, skipped
+  /// Unorganized clouds without a ring field: what core::CloudOrganizer did (also counted above:
+  /// clouds, points, empty points and points that lost their cell).
+  core::CloudOrganizeTotals ringless;
 };
 
 /// Turns point clouds into OrganizedScans of the sensor model's rings x columns. A point's
@@ -89,6 +93,9 @@ struct PointCloud2Stats {
 /// steps of the model's azimuth step, like the packet decoder's columns. Its range is the
 /// `distance` field, else the distance from the ring's beam origin (the model's vertical offset).
 /// Points keep their coordinates; a cell hit twice keeps the nearer point (the other is counted).
+/// Unorganized clouds without a ring field go through core::CloudOrganizer instead: ring by
+/// elevation, column by firing azimuth on the same clockwise grid from the cut azimuth; their
+/// model is the named one, else measured on the first cloud (core::measure_cloud_sensor).
 class PointCloud2Organizer {
  public:
   /// Throws core::ConfigError on bad options.
@@ -104,8 +111,11 @@ class PointCloud2Organizer {
   [[nodiscard]] const PointCloud2Stats& stats() const { return stats_; }
 
  private:
+  core::OrganizedScan organize_ringless(const PointCloud2& cloud, const std::string& where);
+
   PointCloud2Options options_;
   std::optional<core::SensorModel> model_;
+  std::optional<core::CloudOrganizer> ringless_;
   PointCloud2Stats stats_;
 };
 

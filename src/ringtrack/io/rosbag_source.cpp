@@ -244,6 +244,7 @@ std::string RosbagScanSource::summary() const {
     add("empty points", o.empty_points);
     add("points that lost their cell to a nearer one", o.dropped_points);
     add("points with a bad ring", o.bad_ring_points);
+    if (o.ringless.clouds > 0) line += "; without a ring field: " + o.ringless.summary();
   }
   add("messages of other topics ignored", reader_->other_messages());
   return line;

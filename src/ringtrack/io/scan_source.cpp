@@ -1,5 +1,6 @@
 #include "ringtrack/io/scan_source.hpp"
 
+#include <cctype>
 #include <filesystem>
 
 #include "ringtrack/core/error.hpp"
@@ -10,6 +11,7 @@
 #include "ringtrack/io/rosbag2_reader.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
 #include "ringtrack/io/rosbag_source.hpp"
+#include "ringtrack/io/sequence.hpp"
 #include "ringtrack/sensors/hesai/hesai_calibration.hpp"
 #include "ringtrack/sensors/hesai/hesai_format.hpp"
 
@@ -27,9 +29,27 @@ ScanInputFormat parse_scan_input_format(const std::string& name) {
   if (name == "rosbag2" || name == "bag2" || name == "ros2" || name == "db3" || name == "mcap") {
     return ScanInputFormat::kRosbag2;
   }
+  if (name == "folder" || name == "pcd" || name == "bin") return ScanInputFormat::kFolder;
   throw core::ConfigError("input format '" + name +
-                          "': expected auto, pcap, udp, bag (ROS 1), rosbag2 or mcap");
+                          "': expected auto, pcap, udp, bag (ROS 1), rosbag2, mcap or folder");
 }
+
+namespace {
+
+// A sequence folder, or a folder holding at least one .pcd or .bin file.
+bool is_scan_folder(const fs::path& path) {
+  std::error_code ec;
+  if (!fs::is_directory(path, ec)) return false;
+  if (fs::exists(path / "sequence.yaml", ec)) return true;
+  for (const auto& entry : fs::directory_iterator(path, ec)) {
+    std::string ext = entry.path().extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if ((ext == ".pcd" || ext == ".bin") && entry.is_regular_file(ec)) return true;
+  }
+  return false;
+}
+
+}  // namespace
 
 ScanInputFormat guess_scan_input_format(const std::string& input) {
   if (input.rfind("udp://", 0) == 0) return ScanInputFormat::kUdp;
@@ -41,10 +61,11 @@ ScanInputFormat guess_scan_input_format(const std::string& input) {
   if (is_rosbag1_file(path) || ext == ".bag") return ScanInputFormat::kRosbag1;
   if (is_mcap_bag(path)) return ScanInputFormat::kRosbag2;  // by its magic, whatever the name
   if (is_rosbag2_path(path)) return ScanInputFormat::kRosbag2;
+  if (is_scan_folder(path)) return ScanInputFormat::kFolder;
   throw core::InputError(input +
                          ": cannot tell the input format (expected udp://HOST:PORT, a .pcap/"
-                         ".pcapng file, a ROS 1 .bag file or a rosbag2 folder); name it with "
-                         "--format");
+                         ".pcapng file, a ROS 1 .bag file, a rosbag2 folder or a folder of "
+                         "PCD or .bin files); name it with --format");
 }
 
 bool is_hesai_model_name(const std::string& name) {
@@ -74,6 +95,27 @@ sensors::hesai::HesaiDecoderOptions hesai_options(const ScanSourceOptions& optio
   h.keep_partial_scans = v.keep_partial_scans;
   return h;
 }
+
+// A folder of scan files as a stream of scans (stamps from its stamps.txt or the scan rate).
+class FolderScanSource : public ScanSource {
+ public:
+  FolderScanSource(const std::string& input, SequenceReadOptions options)
+      : reader_(input, std::move(options)) {}
+  std::optional<core::OrganizedScan> next() override {
+    SequenceScan item;
+    if (!reader_.next(item)) return std::nullopt;
+    return std::move(item.scan);
+  }
+  [[nodiscard]] const core::SensorModel& model() const override { return reader_.sensor(); }
+  [[nodiscard]] std::string summary() const override {
+    std::string line = std::to_string(reader_.size()) + " scan files";
+    if (const auto organized = reader_.summary(); !organized.empty()) line += "; " + organized;
+    return line;
+  }
+
+ private:
+  SequenceReader reader_;
+};
 
 }  // namespace
 
@@ -135,6 +177,14 @@ std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
         reader = std::make_unique<Rosbag2Reader>(input);
       }
       return std::make_unique<RosbagScanSource>(std::move(reader), std::move(b));
+    }
+    case ScanInputFormat::kFolder: {
+      SequenceReadOptions f;
+      f.scan_rate_hz = options.velodyne.decoder.scan_rate_hz;
+      if (!options.velodyne.decoder.model.empty()) {
+        f.sensor = core::SensorModel::by_name(options.velodyne.decoder.model, f.scan_rate_hz);
+      }
+      return std::make_unique<FolderScanSource>(input, std::move(f));
     }
     case ScanInputFormat::kAuto:
       break;

@@ -1,8 +1,9 @@
 #pragma once
 /// Opens any scan input by name: Velodyne or Hesai pcap/pcapng files, live Velodyne UDP
 /// (velodyne_source.hpp), ROS 1 bags and ROS 2 bags (VelodyneScan, PandarScan or PointCloud2
-/// topics). The sensor is recognised from the packets (Velodyne factory bytes, Hesai header) or
-/// named (`velodyne.decoder.model`). See docs/inputs.md and docs/hesai.md.
+/// topics), and folders of scan files (sequence folders, PCD or KITTI-style .bin files). The sensor
+/// is recognised from the packets (Velodyne factory bytes, Hesai header) or named
+/// (`velodyne.decoder.model`). See docs/inputs.md and docs/hesai.md.
 
 #include <memory>
 #include <string>
@@ -23,6 +24,7 @@ enum class ScanInputFormat {
   kUdp,      ///< live Velodyne packets: udp://HOST:PORT
   kRosbag1,  ///< ROS 1 .bag file
   kRosbag2,  ///< rosbag2 folder (sqlite3 or mcap storage), .db3 file or MCAP file
+  kFolder,   ///< sequence folder, folder of PCD files or of KITTI-style .bin files (sequence.hpp)
 };
 
 /// Everything an input needs.
@@ -40,7 +42,7 @@ struct ScanSourceOptions {
 };
 
 /// Parses a format name: auto, pcap (pcapng), udp, bag (rosbag, rosbag1, ros1), rosbag2 (bag2,
-/// ros2, db3, mcap); throws core::ConfigError.
+/// ros2, db3, mcap), folder (pcd, bin); throws core::ConfigError.
 ScanInputFormat parse_scan_input_format(const std::string& name);
 /// The format an input implies; throws core::InputError when it cannot tell.
 ScanInputFormat guess_scan_input_format(const std::string& input);

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/kitti_bin.hpp"
 #include "ringtrack/io/text.hpp"
 
 namespace ringtrack::io {
@@ -379,53 +380,6 @@ void SequenceWriter::finish() {
 
 // ---------------------------------------------------------------- reader
 
-std::vector<double> measure_elevations_deg(const core::OrganizedScan& scan,
-                                           const std::string& name) {
-  const auto rings = static_cast<std::size_t>(scan.rings());
-  std::vector<double> sum(rings, 0.0);
-  std::vector<std::size_t> count(rings, 0);
-  for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (!scan.valid(i)) continue;
-    const Eigen::Vector3f p = scan.point(i);
-    const auto r = static_cast<std::size_t>(scan.ring_of(i));
-    sum[r] += std::atan2(double{p.z()}, std::hypot(double{p.x()}, double{p.y()})) * kRadToDeg;
-    ++count[r];
-  }
-  std::vector<std::size_t> known;
-  std::vector<double> out(rings, 0.0);
-  for (std::size_t r = 0; r < rings; ++r) {
-    if (count[r] > 0) {
-      out[r] = sum[r] / static_cast<double>(count[r]);
-      known.push_back(r);
-    }
-  }
-  if (known.size() < 2) {
-    throw core::InputError(name +
-                           ": cannot measure the ring elevations (fewer than two rings have "
-                           "points); give the sensor model explicitly");
-  }
-  // Rings without points: linear through the nearest measured rings (extrapolated at the ends).
-  for (std::size_t r = 0; r < rings; ++r) {
-    if (count[r] > 0) continue;
-    auto hi = std::upper_bound(known.begin(), known.end(), r);
-    if (hi == known.begin()) ++hi;
-    if (hi == known.end()) --hi;
-    const std::size_t a = *(hi - 1);
-    const std::size_t b = *hi;
-    const double t = (static_cast<double>(r) - static_cast<double>(a)) /
-                     (static_cast<double>(b) - static_cast<double>(a));
-    out[r] = out[a] + t * (out[b] - out[a]);
-  }
-  for (std::size_t r = 1; r < rings; ++r) {
-    if (!(out[r] > out[r - 1])) {
-      throw core::InputError(name + ": rows are not ordered by elevation (row " +
-                             std::to_string(r) + " is not above row " + std::to_string(r - 1) +
-                             "); give the sensor model explicitly");
-    }
-  }
-  return out;
-}
-
 SequenceReader::SequenceReader(const fs::path& folder, SequenceReadOptions options)
     : options_(std::move(options)) {
   std::error_code ec;
@@ -490,18 +444,27 @@ void SequenceReader::open_sequence(const fs::path& folder) {
 void SequenceReader::open_plain(const fs::path& folder) {
   is_sequence_ = false;
   std::error_code ec;
-  std::vector<fs::path> files;
+  std::vector<fs::path> pcd_files;
+  std::vector<fs::path> bin_files;
   for (const auto& entry : fs::directory_iterator(folder, ec)) {
-    if (entry.is_regular_file(ec) && lower(entry.path().extension().string()) == ".pcd") {
-      files.push_back(entry.path());
-    }
+    if (!entry.is_regular_file(ec)) continue;
+    const std::string ext = lower(entry.path().extension().string());
+    if (ext == ".pcd") pcd_files.push_back(entry.path());
+    if (ext == ".bin") bin_files.push_back(entry.path());
   }
   if (ec) throw core::InputError(folder.string() + ": cannot list: " + ec.message());
-  if (files.empty()) {
+  if (pcd_files.empty() && bin_files.empty()) {
     throw core::InputError(folder.string() +
-                           ": no sequence.yaml and no .pcd files (expected a sequence folder or a "
-                           "folder of organized PCD files)");
+                           ": no sequence.yaml, no .pcd and no .bin files (expected a sequence "
+                           "folder, a folder of PCD files or a folder of KITTI-style .bin files)");
   }
+  if (!pcd_files.empty() && !bin_files.empty()) {
+    throw core::InputError(folder.string() + ": holds both .pcd (" +
+                           std::to_string(pcd_files.size()) + ") and .bin (" +
+                           std::to_string(bin_files.size()) +
+                           ") files; expected one kind of scan file");
+  }
+  std::vector<fs::path> files = pcd_files.empty() ? std::move(bin_files) : std::move(pcd_files);
   std::sort(files.begin(), files.end(), [](const fs::path& a, const fs::path& b) {
     return natural_less(a.filename().string(), b.filename().string());
   });
@@ -512,18 +475,39 @@ void SequenceReader::open_plain(const fs::path& folder) {
   if (options_.sensor && options_.pcd.organize_rings == 0) {
     options_.pcd.organize_rings = options_.sensor->rings();
   }
-  const PcdScan first = read_pcd(paths_.front(), options_.pcd);
+  ScanFile first = read_scan_file(paths_.front());
+  if (first.cloud) {
+    // Clouds without rings: the named sensor's grid, else one measured on the first cloud.
+    if (options_.sensor) {
+      sensor_ = *options_.sensor;
+      sensor_.scan_rate_hz = options_.scan_rate_hz;
+    } else {
+      sensor_ =
+          core::measure_cloud_sensor(*first.cloud, paths_.front().string(), options_.scan_rate_hz);
+      std::string range;
+      append_fixed(range, sensor_.elevation_rad.front() * kRadToDeg, 3);
+      range += "..";
+      append_fixed(range, sensor_.elevation_rad.back() * kRadToDeg, 3);
+      measured_sensor_ = "sensor measured on " + paths_.front().filename().string() + ": " +
+                         std::to_string(sensor_.rings()) + " rings (" + range + " deg), " +
+                         std::to_string(sensor_.columns()) + " columns";
+    }
+    meta_ = SequenceMeta::for_sensor(sensor_, sensor_.columns());
+    meta_.scans = paths_.size();
+    return;
+  }
+  const PcdScan& pcd = *first.pcd;
   meta_.scan_rate_hz = options_.scan_rate_hz;
-  meta_.columns = first.scan.columns();
+  meta_.columns = pcd.scan.columns();
   meta_.scans = paths_.size();
   if (options_.sensor) {
     sensor_ = *options_.sensor;
     sensor_.scan_rate_hz = options_.scan_rate_hz;
-    meta_ = SequenceMeta::for_sensor(sensor_, first.scan.columns());
+    meta_ = SequenceMeta::for_sensor(sensor_, pcd.scan.columns());
     meta_.scans = paths_.size();
   } else {
     meta_.sensor = "generic";
-    meta_.elevations_deg = measure_elevations_deg(first.scan, paths_.front().string());
+    meta_.elevations_deg = measure_elevations_deg(pcd.scan, paths_.front().string());
     sensor_ = core::SensorModel::generic(meta_.elevations_deg, std::max(8, meta_.columns),
                                          options_.scan_rate_hz);
   }
@@ -537,6 +521,27 @@ bool increasing(const std::vector<std::int64_t>& stamps) {
 }
 
 }  // namespace
+
+SequenceReader::ScanFile SequenceReader::read_scan_file(const fs::path& path) const {
+  ScanFile out;
+  const auto bytes = read_file_bytes(path);
+  if (lower(path.extension().string()) == ".bin") {
+    out.cloud = decode_kitti_bin(bytes, path.string());
+    return out;
+  }
+  if (pcd_needs_organizer(parse_pcd_header(bytes, path.string()), options_.pcd.ring_field)) {
+    out.cloud = decode_pcd_cloud(bytes, path.string());
+  } else {
+    out.pcd = decode_pcd(bytes, path.string(), options_.pcd);
+  }
+  return out;
+}
+
+std::string SequenceReader::summary() const {
+  if (organize_totals_.clouds == 0) return {};
+  return measured_sensor_.empty() ? organize_totals_.summary()
+                                  : measured_sensor_ + "; " + organize_totals_.summary();
+}
 
 void SequenceReader::load_stamps_and_poses(const fs::path& folder) {
   std::error_code ec;
@@ -601,7 +606,15 @@ SequenceScan SequenceReader::read(std::size_t i) const {
   SequenceScan out;
   out.index = i;
   out.path = paths_.at(i);
-  PcdScan pcd = read_pcd(out.path, options_.pcd);
+  ScanFile file = read_scan_file(out.path);
+  if (file.cloud) {
+    if (!organizer_) organizer_.emplace(sensor_, options_.organizer);
+    core::OrganizedCloud organized = organizer_->organize(*file.cloud);
+    organize_totals_.add(organized.stats);
+    file.pcd.emplace();
+    file.pcd->scan = std::move(organized.scan);
+  }
+  PcdScan& pcd = *file.pcd;
   const std::string origin = is_sequence_ ? "the sensor " + meta_.sensor + " of sequence.yaml"
                                           : "the first scan " + paths_.front().filename().string();
   if (pcd.scan.rings() != sensor_.rings()) {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "ringtrack/core/cloud_organizer.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
 #include "ringtrack/core/sensor_model.hpp"
@@ -110,8 +111,14 @@ struct SequenceReadOptions {
   std::filesystem::path poses;  ///< poses file replacing the folder's poses.txt (empty: none)
   PoseFileFormat poses_format{PoseFileFormat::kTum};  ///< format of `poses` / poses.txt
   std::filesystem::path stamps;  ///< stamps file replacing the folder's stamps.txt (empty: none)
-  /// Plain PCD folders: the sensor (default: a generic one with the first scan's ring elevations).
+  /// Plain folders: the sensor (default: a generic one with the first scan's ring elevations,
+  /// measured by core::measure_cloud_sensor for clouds without rings).
   std::optional<core::SensorModel> sensor;
+  /// Clouds without rings (.bin files, PCD of HEIGHT 1 without a ring field): the column grid.
+  /// Clockwise from +x, as real sensors turn, with the firing delays of a named model undone, as
+  /// a driver's points carry them (a measured sensor has none).
+  core::CloudOrganizerOptions organizer{
+      .first_column_azimuth_rad = 0.0, .clockwise = true, .undo_firing_rotation = true};
   /// Plain PCD folders without a stamps file: stamp of scan i = i / scan_rate_hz.
   double scan_rate_hz{10.0};
   PcdReadOptions pcd;  ///< how the PCD files are read (row order, organizing unorganized clouds)
@@ -126,9 +133,11 @@ struct SequenceScan {
   core::Pose pose;                    ///< sensor in world at scan.stamp_ns
 };
 
-/// Reads a sequence folder, or a plain folder of organized PCD files sorted by name (digit runs
-/// compared as numbers). Stamps, poses and the scan list are checked on construction, so errors
-/// (missing files, stamps outside the poses) surface before the first scan is processed.
+/// Reads a sequence folder, or a plain folder of PCD files or of KITTI-style .bin files sorted by
+/// name (digit runs compared as numbers). Clouds without rings (.bin, PCD of HEIGHT 1 without a
+/// ring field) are organized by core::CloudOrganizer into the sensor's grid. Stamps, poses and the
+/// scan list are checked on construction, so errors (missing files, stamps outside the poses)
+/// surface before the first scan is processed.
 class SequenceReader {
  public:
   /// Opens the folder; throws core::InputError naming the file and what was expected.
@@ -142,7 +151,7 @@ class SequenceReader {
   [[nodiscard]] const core::SensorModel& sensor() const { return sensor_; }
   /// Number of scans.
   [[nodiscard]] std::size_t size() const { return paths_.size(); }
-  /// PCD file of scan i.
+  /// PCD or .bin file of scan i.
   [[nodiscard]] const std::filesystem::path& scan_path(std::size_t i) const { return paths_.at(i); }
   /// Stamp of scan i (time of its first column).
   [[nodiscard]] std::int64_t stamp_ns(std::size_t i) const { return stamps_.at(i); }
@@ -157,8 +166,21 @@ class SequenceReader {
   [[nodiscard]] SequenceScan read(std::size_t i) const;
   /// Reads the next scan (from 0); false after the last.
   bool next(SequenceScan& out);
+  /// What organizing the clouds without rings read so far did (clouds 0 when none was read).
+  [[nodiscard]] const core::CloudOrganizeTotals& organize_totals() const {
+    return organize_totals_;
+  }
+  /// organize_totals() as one line (after the measured sensor's rings and columns when it was
+  /// measured), "" when no cloud without rings was read.
+  [[nodiscard]] std::string summary() const;
 
  private:
+  // A scan file's contents: an organized scan, or a cloud without rings.
+  struct ScanFile {
+    std::optional<PcdScan> pcd;
+    std::optional<core::UnorganizedCloud> cloud;
+  };
+  [[nodiscard]] ScanFile read_scan_file(const std::filesystem::path& path) const;
   void open_sequence(const std::filesystem::path& folder);
   void open_plain(const std::filesystem::path& folder);
   void load_stamps_and_poses(const std::filesystem::path& folder);
@@ -173,13 +195,13 @@ class SequenceReader {
   bool has_poses_{false};
   std::optional<std::filesystem::path> objects_csv_;
   std::size_t next_{0};
+  mutable std::optional<core::CloudOrganizer> organizer_;  // built at the first cloud
+  mutable core::CloudOrganizeTotals organize_totals_;
+  std::string measured_sensor_;  // how the sensor was measured on the first cloud, or ""
 };
 
-/// Per-ring elevation (degrees, bottom ring first) of an organized scan: the mean over each
-/// ring's valid points, rings without points interpolated; throws core::InputError when fewer
-/// than two rings have points.
-std::vector<double> measure_elevations_deg(const core::OrganizedScan& scan,
-                                           const std::string& name);
+/// Per-ring elevations measured on an organized scan (core/cloud_organizer.hpp).
+using core::measure_elevations_deg;
 
 /// Name of scan i inside scans/: six or more digits and ".pcd" ("000042.pcd").
 std::string scan_file_name(std::size_t index);

@@ -275,7 +275,7 @@ TEST(Sequence, RejectsIncompleteAndInconsistentFolders) {
   EXPECT_NE(e.find("nothing: no such folder"), std::string::npos) << e;
   fs::create_directories(dir / "empty");
   e = input_error([&] { SequenceReader r(dir / "empty"); });
-  EXPECT_NE(e.find("no sequence.yaml and no .pcd files"), std::string::npos) << e;
+  EXPECT_NE(e.find("no sequence.yaml, no .pcd and no .bin files"), std::string::npos) << e;
 }
 
 std::string yaml_error(const std::string& yaml) {
