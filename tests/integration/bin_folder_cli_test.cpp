@@ -56,16 +56,24 @@ TEST(BinFolderCli, RunAndConvertReadAFolderOfBinFiles) {
   fs::remove_all(dir);
 }
 
-TEST(BinFolderCli, ATruncatedFileIsOneErrorLine) {
+// With --on-bad-scan stop the run ends on the file with one line; by default (skip) the file is
+// skipped with a warning naming it, and the other scans are processed.
+TEST(BinFolderCli, ATruncatedFileIsOneErrorLineOrSkipped) {
   const std::string dir = testing::make_temp_dir("ringtrack-bins-");
   const fs::path bins = write_bins(dir);
   fs::resize_file(bins / "000001.bin", fs::file_size(bins / "000001.bin") - 6);
-  const auto r =
-      run_command(kCli + " run " + bins.string() + " --sensor vlp16 --quiet --out " + dir + "/run");
-  EXPECT_NE(r.exit_code, 0);
-  EXPECT_NE(r.err.find("000001.bin: "), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("is not a multiple of 16"), std::string::npos) << r.err;
-  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  const auto stop =
+      run_command(kCli + " run " + bins.string() +
+                  " --sensor vlp16 --quiet --on-bad-scan stop --out " + dir + "/stop");
+  EXPECT_NE(stop.exit_code, 0);
+  EXPECT_NE(stop.err.find("000001.bin: "), std::string::npos) << stop.err;
+  EXPECT_NE(stop.err.find("is not a multiple of 16"), std::string::npos) << stop.err;
+  EXPECT_EQ(std::count(stop.err.begin(), stop.err.end(), '\n'), 1) << stop.err;
+  const auto skip =
+      run_command(kCli + " run " + bins.string() + " --sensor vlp16 --out " + dir + "/skip");
+  EXPECT_EQ(skip.exit_code, 0) << skip.err;
+  EXPECT_NE(skip.err.find("000001.bin"), std::string::npos) << skip.err;
+  EXPECT_NE(skip.err.find("is not a multiple of 16"), std::string::npos) << skip.err;
   fs::remove_all(dir);
 }
 

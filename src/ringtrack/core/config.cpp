@@ -383,7 +383,7 @@ class Schema {
             "free_space also for a moving sensor, projecting each candidate into the later scan "
             "(off by default: the projection ignores the sensor's motion during a scan, up to "
             "half a metre at 5 m/s, and removed about 0.1 % of the static points in the "
-            "benchmark; docs/mapping.md)");
+            "benchmark; docs/tracking.md)");
     number("free_space_clearance_m", m.free_space_clearance_m, 0.0, 10.0,
            "free_space, a scan from another viewpoint: no beam through the cube of this half "
            "edge around the point may end in it (the nearest beam may pass beside a thin pole "

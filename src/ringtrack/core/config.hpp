@@ -140,7 +140,7 @@ struct MappingConfig {
   double object_margin_m{0.2};  // a measured dynamic box grows by this sideways and up, and every
                                 // point inside leaves its scan (0: only its detection's cells)
   RemovedObjects remove{RemovedObjects::kDynamic};  // which tracked objects leave the map
-  // Free-space line (docs/mapping.md): a logged candidate point (segmented, or near a
+  // Free-space line (docs/tracking.md): a logged candidate point (segmented, or near a
   // hypothesis) that a later scan sees through leaves the scan before it reaches the map.
   bool free_space{true};
   double free_space_margin_m{0.3};     // the beam must end this far beyond the point

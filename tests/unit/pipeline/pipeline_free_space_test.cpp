@@ -1,4 +1,4 @@
-// The map's free-space line (mapping.free_space, docs/mapping.md) on simulated scenes, scored
+// The map's free-space line (mapping.free_space, docs/tracking.md) on simulated scenes, scored
 // against the simulator's per-cell labels: a point of a logged scan that a later scan sees
 // through leaves the scan before it reaches the map, independently of the tracks.
 
@@ -154,7 +154,7 @@ TEST(PipelineFreeSpace, AMovingSensorIsLeftToTheTracksByDefault) {
 }
 
 // free_space_moving projects into scans from other viewpoints: more of the walker goes, and the
-// cost is bounded: the projection ignores the motion during a scan (docs/mapping.md), so some
+// cost is bounded: the projection ignores the motion during a scan (docs/tracking.md), so some
 // pole points seen "through" leave too (measured: 0.57 % of the static points against 0.26 %
 // that the tracks alone remove here).
 TEST(PipelineFreeSpace, MovingSensorOptionRemovesMoreOfTheWalkerAtABoundedCost) {
