@@ -429,8 +429,9 @@ std::unique_ptr<io::FoxgloveSink> open_mcap(const RunOptions& o, const core::Con
   return sink;
 }
 
-// Writes a voxel map's points as binary PLY (x y z intensity); returns how many.
-std::size_t write_map_ply(const fs::path& path, const mapping::StaticMap& map) {
+// Writes a voxel map's points as binary PLY (x y z intensity), and as PCD beside it when
+// with_pcd; returns how many.
+std::size_t write_map(const fs::path& path, const mapping::StaticMap& map, bool with_pcd) {
   const auto points = map.points();
   std::vector<Eigen::Vector3f> xyz;
   std::vector<float> intensity;
@@ -441,6 +442,7 @@ std::size_t write_map_ply(const fs::path& path, const mapping::StaticMap& map) {
     intensity.push_back(p.intensity);
   }
   io::write_ply(path, xyz, intensity);
+  if (with_pcd) io::write_pcd_points(fs::path(path).replace_extension(".pcd"), xyz, intensity);
   return points.size();
 }
 
@@ -614,12 +616,12 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
   timing.close();
   if (odometry_log) odometry_log->close();
 
-  const std::size_t map_voxels = write_map_ply(out / "static_map.ply", pipeline->static_map());
+  const std::size_t map_voxels = write_map(out / "static_map.ply", pipeline->static_map(), true);
   io::write_tum(out / "poses.txt", poses);
   if (mcap) mcap->finish(pipeline->static_map(), scan.stamp_ns);
   bool plotted = false;
   if (raw_map) {
-    write_map_ply(out / "raw_map.ply", *raw_map);
+    write_map(out / "raw_map.ply", *raw_map, false);
     plotted = run_plot_script("plot_maps.py", {out, out / "maps.png"});
   }
 
@@ -640,7 +642,9 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
               eval::quantile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
   std::printf(
       "outputs          "
-      "%s/{tracks.csv,timing.csv,static_map.ply,poses.txt,config.yaml,run.json%s%s%s%s}\n",
+      "%s/"
+      "{tracks.csv,timing.csv,static_map.ply,static_map.pcd,poses.txt,config.yaml,run.json%s%s%s%s}"
+      "\n",
       o.out.c_str(), odometry ? ",odometry.csv" : "", raw_map ? ",raw_map.ply" : "",
       plotted ? ",maps.png" : "", o.filtered_scans ? ",filtered/" : "");
   if (mcap) {

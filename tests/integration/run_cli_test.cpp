@@ -3,11 +3,14 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "ringtrack/io/csv_writers.hpp"
+#include "ringtrack/io/pcd.hpp"
+#include "ringtrack/io/text.hpp"
 #include "support/run_command.hpp"
 
 namespace ringtrack {
@@ -59,6 +62,22 @@ TEST_F(RunCli, WritesEveryOutputWithItsSchema) {
       << first_line(out + "/timing.csv");
   EXPECT_EQ(line_count(out + "/timing.csv"), 31u);
   EXPECT_EQ(first_line(out + "/static_map.ply"), "ply");
+  // The PCD map holds the PLY map's points, in the same order (binary PLY: 16 bytes per point
+  // after the header).
+  const auto map =
+      io::decode_pcd_cloud(io::read_file_bytes(out + "/static_map.pcd"), "static_map.pcd");
+  const auto ply = io::read_file_bytes(out + "/static_map.ply");
+  const std::string end_header = "end_header\n";
+  const auto body = std::search(ply.begin(), ply.end(), end_header.begin(), end_header.end()) -
+                    ply.begin() + static_cast<std::ptrdiff_t>(end_header.size());
+  ASSERT_EQ(ply.size() - static_cast<std::size_t>(body), 16 * map.size());
+  ASSERT_GT(map.size(), 100u);
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    float v[4];
+    std::memcpy(v, ply.data() + body + static_cast<std::ptrdiff_t>(16 * i), sizeof v);
+    ASSERT_EQ(map.xyz[i], Eigen::Vector3f(v[0], v[1], v[2])) << i;
+    ASSERT_EQ(map.intensity[i], v[3]) << i;
+  }
   EXPECT_TRUE(fs::exists(out + "/filtered/000029.pcd"));
   std::ifstream config(out + "/config.yaml");
   std::stringstream text;

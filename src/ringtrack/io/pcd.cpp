@@ -182,8 +182,8 @@ std::vector<Column> load_columns(std::span<const std::uint8_t> bytes, const PcdH
       if (static_cast<std::uint64_t>(compressed) * kLzfMaxExpansion < uncompressed) {
         fail(name, "binary_compressed data declares " + std::to_string(uncompressed) +
                        " uncompressed bytes, more than " + std::to_string(compressed) +
-                       " compressed bytes can hold (at most " +
-                       std::to_string(kLzfMaxExpansion) + " times as many)");
+                       " compressed bytes can hold (at most " + std::to_string(kLzfMaxExpansion) +
+                       " times as many)");
       }
       data.decompressed.resize(uncompressed);
       try {
@@ -696,27 +696,31 @@ void estimate_column_azimuths(core::OrganizedScan& scan) {
   }
 }
 
-std::string encode_pcd(const core::OrganizedScan& scan, std::span<const std::uint32_t> labels,
-                       PcdEncoding encoding) {
-  const std::size_t n = scan.size();
-  if (!labels.empty() && labels.size() != n) {
-    throw core::Error("encode_pcd: " + std::to_string(labels.size()) + " labels for " +
-                      std::to_string(n) + " cells");
-  }
-  if (n == 0) throw core::Error("encode_pcd: the scan is empty");
-  const bool with_labels = !labels.empty();
+namespace {
+
+// The fields of a cloud to encode, one array per field (labels may be empty).
+struct PcdFields {
+  std::span<const float> xs, ys, zs, intensities;
+  std::span<const std::uint32_t> labels;
+  std::size_t width{0}, height{0};
+};
+
+std::string encode_fields(const PcdFields& f, PcdEncoding encoding) {
+  const std::size_t n = f.xs.size();
+  const bool with_labels = !f.labels.empty();
   std::string out;
   out += "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n";
   out += with_labels
              ? "FIELDS x y z intensity label\nSIZE 4 4 4 4 4\nTYPE F F F F U\nCOUNT 1 1 1 1 1\n"
              : "FIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n";
-  out += "WIDTH " + std::to_string(scan.columns()) + "\nHEIGHT " + std::to_string(scan.rings()) +
+  out += "WIDTH " + std::to_string(f.width) + "\nHEIGHT " + std::to_string(f.height) +
          "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA " +
          std::string(to_string(encoding)) + "\n";
-  const auto& xs = scan.xs();
-  const auto& ys = scan.ys();
-  const auto& zs = scan.zs();
-  const auto& is = scan.intensities();
+  const auto& xs = f.xs;
+  const auto& ys = f.ys;
+  const auto& zs = f.zs;
+  const auto& is = f.intensities;
+  const auto& labels = f.labels;
   switch (encoding) {
     case PcdEncoding::kAscii:
       for (std::size_t i = 0; i < n; ++i) {
@@ -765,6 +769,44 @@ std::string encode_pcd(const core::OrganizedScan& scan, std::span<const std::uin
     }
   }
   return out;
+}
+
+}  // namespace
+
+std::string encode_pcd(const core::OrganizedScan& scan, std::span<const std::uint32_t> labels,
+                       PcdEncoding encoding) {
+  const std::size_t n = scan.size();
+  if (!labels.empty() && labels.size() != n) {
+    throw core::Error("encode_pcd: " + std::to_string(labels.size()) + " labels for " +
+                      std::to_string(n) + " cells");
+  }
+  if (n == 0) throw core::Error("encode_pcd: the scan is empty");
+  return encode_fields(
+      {scan.xs(), scan.ys(), scan.zs(), scan.intensities(), labels,
+       static_cast<std::size_t>(scan.columns()), static_cast<std::size_t>(scan.rings())},
+      encoding);
+}
+
+std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
+                              std::span<const float> intensities, PcdEncoding encoding) {
+  if (!intensities.empty() && intensities.size() != points.size()) {
+    throw core::Error("encode_pcd_points: " + std::to_string(intensities.size()) +
+                      " intensities for " + std::to_string(points.size()) + " points");
+  }
+  const std::size_t n = points.size();
+  std::vector<float> xs(n), ys(n), zs(n), is(n, 0.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    xs[i] = points[i].x();
+    ys[i] = points[i].y();
+    zs[i] = points[i].z();
+    if (!intensities.empty()) is[i] = intensities[i];
+  }
+  return encode_fields({xs, ys, zs, is, {}, n, 1}, encoding);
+}
+
+void write_pcd_points(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
+                      std::span<const float> intensities, PcdEncoding encoding) {
+  write_file(path, encode_pcd_points(points, intensities, encoding));
 }
 
 void write_pcd(const std::filesystem::path& path, const core::OrganizedScan& scan,

@@ -99,6 +99,16 @@ void write_pcd(const std::filesystem::path& path, const core::OrganizedScan& sca
                std::span<const std::uint32_t> labels,
                PcdEncoding encoding = PcdEncoding::kBinaryCompressed);
 
+/// Encodes an unorganized cloud (WIDTH = points, HEIGHT 1) with fields x y z intensity (F4), e.g.
+/// the static map; intensities empty (all 0) or one per point, else core::Error.
+std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
+                              std::span<const float> intensities, PcdEncoding encoding);
+/// Writes encode_pcd_points' bytes to a file; I/O failures throw core::Error and remove the
+/// partial file.
+void write_pcd_points(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
+                      std::span<const float> intensities,
+                      PcdEncoding encoding = PcdEncoding::kBinaryCompressed);
+
 /// Sets each column's azimuth to the circular mean azimuth of its valid points; columns without
 /// points are interpolated from their neighbours (uniform 2*pi/columns steps when none has points).
 void estimate_column_azimuths(core::OrganizedScan& scan);
