@@ -88,25 +88,32 @@ void run_pipeline(benchmark::State& state, const std::vector<FeedScan>& data,
   state.counters["mapping_ms"] = mean(sum.mapping_ms);
 }
 
+// Argument: mapping.free_space on (1, the default) or off (0).
 void BM_PipelineScan(benchmark::State& state) {
-  run_pipeline(state, open_field_scans());
-}
-
-// Argument: mapping.free_space off (0) or on (1), to price the free-space line.
-void BM_PipelineScanMovingPark(benchmark::State& state) {
   core::Config config;
   config.mapping.free_space = state.range(0) != 0;
+  run_pipeline(state, open_field_scans(), config);
+}
+
+// Argument: mapping.free_space_moving off (0, the default) or on (1), to price the free-space
+// line's projections into scans from other viewpoints.
+void BM_PipelineScanMovingPark(benchmark::State& state) {
+  core::Config config;
+  config.mapping.free_space_moving = state.range(0) != 0;
   run_pipeline(state, moving_park_scans(), config);
 }
 
 }  // namespace
 
 BENCHMARK(BM_PipelineScan)
+    ->ArgName("free_space")
+    ->Arg(1)
+    ->Arg(0)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PipelineScanMovingPark)
-    ->ArgName("free_space")
+    ->ArgName("free_space_moving")
     ->Arg(0)
     ->Arg(1)
     ->Unit(benchmark::kMillisecond)

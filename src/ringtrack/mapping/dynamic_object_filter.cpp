@@ -319,34 +319,35 @@ void DynamicObjectFilter::mark_candidates(LoggedScan& logged, const core::Organi
   // are tested, and only with free_space_moving (docs/BENCHMARK.md, issue 12).
   const bool resting = log_.size() >= 2 && same_view(log_[log_.size() - 2], scan, logged.pose);
   if (!resting && !config_.free_space_moving) return;
-  const std::size_t n = logged.points.size();
-  is_candidate_.assign(n, 0);
-  if (segments != nullptr && resting) {
-    for (std::size_t i = 0; i < n; ++i) {
-      if ((*segments)[logged.cells[i]] != 0) is_candidate_[i] = 1;
-    }
-  }
   // Near every person or dynamic hypothesis: a head above its box, legs below it, an arm beside
   // it (the points the boxes miss, docs/BENCHMARK.md, issue 12), and people never found dynamic.
   // Not near other clutter: a moving sensor's park has hundreds of such hypotheses (trees,
   // bushes), whose surroundings would cost a projection per point and hold no walker.
   const auto reach = static_cast<float>(config_.free_space_reach_m);
-  const bool bounded = logged.bounded_points == n;
+  near_boxes_.clear();
   for (const auto& h : hypotheses) {
     if (h.box.empty() || !(h.person || h.ever_dynamic)) continue;
-    const core::Box3 near{h.box.min.array() - reach, h.box.max.array() + reach};
-    for (std::size_t b = 0; b < logged.block_bounds.size(); ++b) {
-      if (bounded && !logged.block_bounds[b].intersects(near)) continue;
-      const std::size_t end = std::min(n, (b + 1) * LoggedScan::kBlockPoints);
-      for (std::size_t i = b * LoggedScan::kBlockPoints; i < end; ++i) {
-        if (near.contains(logged.points[i])) is_candidate_[i] = 1;
-      }
-    }
+    near_boxes_.push_back({h.box.min.array() - reach, h.box.max.array() + reach});
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    if (is_candidate_[i] == 0) continue;
-    logged.candidates.push_back(static_cast<std::uint32_t>(i));
-    logged.candidate_ranges.push_back(scan.range_m(logged.cells[i]));
+  const std::uint8_t* segmented = segments != nullptr && resting ? segments->data() : nullptr;
+  // One pass over the points, block by block: the near boxes meet few blocks.
+  const std::size_t n = logged.points.size();
+  const bool bounded = logged.bounded_points == n;
+  for (std::size_t b = 0; b * LoggedScan::kBlockPoints < n; ++b) {
+    near_block_.clear();
+    for (const auto& box : near_boxes_) {
+      if (!bounded || logged.block_bounds[b].intersects(box)) near_block_.push_back(&box);
+    }
+    const std::size_t end = std::min(n, (b + 1) * LoggedScan::kBlockPoints);
+    for (std::size_t i = b * LoggedScan::kBlockPoints; i < end; ++i) {
+      bool candidate = segmented != nullptr && segmented[logged.cells[i]] != 0;
+      for (std::size_t k = 0; !candidate && k < near_block_.size(); ++k) {
+        candidate = near_block_[k]->contains(logged.points[i]);
+      }
+      if (!candidate) continue;
+      logged.candidates.push_back(static_cast<std::uint32_t>(i));
+      logged.candidate_ranges.push_back(scan.range_m(logged.cells[i]));
+    }
   }
 }
 

@@ -143,7 +143,8 @@ class DynamicObjectFilter {
   std::deque<LoggedScan> log_;
   std::vector<LoggedScan> released_;
   std::vector<std::int32_t> point_of_cell_;
-  std::vector<std::uint8_t> is_candidate_;  // per point of the scan being logged
+  std::vector<core::Box3> near_boxes_;        // free-space candidates: around these boxes
+  std::vector<const core::Box3*> near_block_;  // ... those that meet the block at hand
   std::unordered_map<std::uint64_t, ObjectHistory> objects_;
   std::uint64_t next_sequence_{0};
   FilterResult result_;
