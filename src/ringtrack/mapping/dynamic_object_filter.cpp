@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <string>
 
 #include "ringtrack/core/error.hpp"
@@ -63,10 +64,13 @@ void compute_block_bounds(const std::vector<Eigen::Vector3f>& points,
   }
 }
 
-// Both scans were taken from one viewpoint (a resting sensor): each cell's beam is the same.
+// Both scans were taken from one viewpoint (a resting sensor): each cell's beam is the same, up
+// to the pose noise of a resting sensor's pose source (the bounds of background.static_shift_m and
+// static_turn_deg's defaults; a 0.1 degree turn moves a beam 9 cm at 50 m, well inside
+// free_space_margin_m).
 bool same_view(const LoggedScan& logged, const core::OrganizedScan& now, const core::Pose& pose) {
-  constexpr double kShiftM = 1e-3;
-  constexpr double kTurnRad = 1e-4;
+  constexpr double kShiftM = 0.02;
+  constexpr double kTurnRad = 0.1 * std::numbers::pi / 180.0;
   return logged.rings == now.rings() && logged.columns == now.columns() &&
          (logged.pose.translation - pose.translation).norm() <= kShiftM &&
          logged.pose.rotation.normalized().angularDistance(pose.rotation.normalized()) <= kTurnRad;
@@ -201,6 +205,7 @@ const FilterResult& DynamicObjectFilter::process(
   logged.columns = scan.columns();
   logged.removed_count = 0;
   logged.candidates.clear();
+  logged.candidate_ranges.clear();
   const Eigen::Isometry3d world_from_sensor = pose.isometry();
   const Eigen::Matrix3f rotation = world_from_sensor.linear().cast<float>();
   const Eigen::Vector3f translation = world_from_sensor.translation().cast<float>();
