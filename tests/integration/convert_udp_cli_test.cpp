@@ -98,14 +98,7 @@ TEST(ConvertUdpCli, CtrlCEndsTheRecordingWithACompleteSequence) {
   std::this_thread::sleep_for(300ms);  // let the receiver drain the socket
   ::kill(pid, SIGINT);
   int status = 0;
-  pid_t done = 0;
-  for (int i = 0; i < 1000 && done == 0; ++i) {
-    done = ::waitpid(pid, &status, WNOHANG);
-    if (done == 0) std::this_thread::sleep_for(10ms);
-  }
-  if (done == 0) {
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, &status, 0);
+  if (!testing::wait_or_kill(pid, status)) {
     FAIL() << "the tool did not stop on SIGINT";
   }
   std::stringstream err;

@@ -434,16 +434,8 @@ Stopped stop_live_command(const std::string& command, const std::string& out,
   }
   ::kill(pid, signal);
   int status = 0;
-  pid_t done = 0;
-  for (int i = 0; i < 1000 && done == 0; ++i) {
-    done = ::waitpid(pid, &status, WNOHANG);
-    if (done == 0) std::this_thread::sleep_for(10ms);
-  }
-  if (done == 0) {
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, &status, 0);
-  }
-  result.exited = done != 0 && WIFEXITED(status);
+  const bool ended = testing::wait_or_kill(pid, status);
+  result.exited = ended && WIFEXITED(status);
   result.exit_code = result.exited ? WEXITSTATUS(status) : -1;
   result.err = text_of(err_path);
   result.out = text_of(out_path);
@@ -524,14 +516,7 @@ TEST(SimulateStopSignal, SigtermEndsWithACompleteShorterSequence) {
   }
   ::kill(pid, SIGTERM);
   int status = 0;
-  pid_t done = 0;
-  for (int i = 0; i < 1000 && done == 0; ++i) {
-    done = ::waitpid(pid, &status, WNOHANG);
-    if (done == 0) std::this_thread::sleep_for(10ms);
-  }
-  if (done == 0) {
-    ::kill(pid, SIGKILL);
-    ::waitpid(pid, &status, 0);
+  if (!testing::wait_or_kill(pid, status)) {
     FAIL() << "simulate did not stop on SIGTERM";
   }
   ASSERT_TRUE(WIFEXITED(status));

@@ -23,6 +23,12 @@ struct Pose {
   [[nodiscard]] Eigen::Vector3f to_world(const Eigen::Vector3f& p) const {
     return (rotation.normalized() * p.cast<double>() + translation).cast<float>();
   }
+  /// True when other lies within shift_m of this pose's position and turn_rad of its rotation
+  /// (a resting sensor's pose noise).
+  [[nodiscard]] bool near(const Pose& other, double shift_m, double turn_rad) const {
+    return (translation - other.translation).norm() <= shift_m &&
+           rotation.normalized().angularDistance(other.rotation.normalized()) <= turn_rad;
+  }
   /// Pose interpolated between a (at t=0) and b (at t=1): linear translation, slerp rotation.
   [[nodiscard]] static Pose interpolate(const Pose& a, const Pose& b, double t) {
     Pose out;

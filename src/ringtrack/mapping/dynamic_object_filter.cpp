@@ -72,8 +72,7 @@ bool same_view(const LoggedScan& logged, const core::OrganizedScan& now, const c
   constexpr double kShiftM = 0.02;
   constexpr double kTurnRad = 0.1 * std::numbers::pi / 180.0;
   return logged.rings == now.rings() && logged.columns == now.columns() &&
-         (logged.pose.translation - pose.translation).norm() <= kShiftM &&
-         logged.pose.rotation.normalized().angularDistance(pose.rotation.normalized()) <= kTurnRad;
+         logged.pose.near(pose, kShiftM, kTurnRad);
 }
 
 // A descending beam that passes h above a point on the ground lands on the ground h / tan(its

@@ -145,12 +145,9 @@ const FrameResult& Pipeline::process_with_odometry(core::OrganizedScan& scan) {
 
 bool Pipeline::track_rest(const core::Pose& pose) {
   const auto& limits = config_.background;
-  if (rest_pose_) {
-    const double shift = (pose.translation - rest_pose_->translation).norm();
-    const double turn_deg =
-        pose.rotation.normalized().angularDistance(rest_pose_->rotation.normalized()) * 180.0 /
-        std::numbers::pi;
-    if (shift <= limits.static_shift_m && turn_deg <= limits.static_turn_deg) return true;
+  if (rest_pose_ && pose.near(*rest_pose_, limits.static_shift_m,
+                              limits.static_turn_deg * std::numbers::pi / 180.0)) {
+    return true;
   }
   // A new resting pose candidate: what was learned belongs to another viewpoint. The model is
   // reset once when the sensor leaves, not on every scan of a moving sensor.
