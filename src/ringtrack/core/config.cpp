@@ -422,6 +422,17 @@ class Schema {
            "it rests");
     number("static_turn_deg", b.static_turn_deg, 0.0, 180.0,
            "... and within this rotation of that pose (degrees)");
+    boolean("moving_memory", b.moving_memory,
+            "a moving sensor keeps its recent scans instead and asks whether they saw through "
+            "the points of a small cluster from their own viewpoints");
+    integer("moving_lag_scans", b.moving_lag_scans, 1, 250,
+            "moving_memory: the scans this many scans back, twice and four times as far back "
+            "are asked (the largest sets how many scans are kept)");
+    number("moving_lateral_m", b.moving_lateral_m, 0.0, 10.0,
+           "moving_memory: an earlier scan's beam decides about a point passing this close (m)");
+    number("moving_clearance_m", b.moving_clearance_m, 0.0, 10.0,
+           "moving_memory: none of the earlier scan's beams through the cube of this half side "
+           "around the point may end inside or before it (m)");
     build_odometry(c.odometry);
   }
 

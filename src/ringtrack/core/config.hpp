@@ -174,6 +174,16 @@ struct BackgroundRangeConfig {
   double static_shift_m{0.02};
   /// ... and this rotation (degrees) of the pose where it came to rest; beyond, it forgets it.
   double static_turn_deg{0.1};
+  /// A moving sensor's memory instead (core::RecentViews): whether earlier scans saw through
+  /// the points of a small cluster, from their own viewpoints.
+  bool moving_memory{true};
+  /// The scans this many scans back, twice and four times as far back are asked.
+  int moving_lag_scans{5};
+  /// An earlier scan's beam decides about a point passing this close to it (m) ...
+  double moving_lateral_m{0.05};
+  /// ... and none of its beams through the cube of this half side around the point may end
+  /// inside or before the cube (m).
+  double moving_clearance_m{0.1};
 };
 
 /// What ICP minimises per correspondence (docs/odometry.md, "Residual").

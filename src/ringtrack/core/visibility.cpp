@@ -119,7 +119,7 @@ void VisibilityCounts::add(Visibility v) {
 }
 
 VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& model,
-                                 const Pose& pose)
+                                 const Pose& pose, const Motion& motion)
     : scan_(&scan), rings_(scan.rings()), columns_(scan.columns()) {
   model.validate();
   if (scan.rings() != model.rings() || scan.columns() <= 0) {
@@ -173,6 +173,8 @@ VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& m
     accept_above_rad_[r] =
         0.5 * (r + 1 == nr ? nominal_gap : elevation_rad_[r + 1] - elevation_rad_[r]);
   }
+  max_abs_elevation_rad_ =
+      std::max(std::abs(elevation_rad_.front()), std::abs(elevation_rad_.back()));
   offset_min_m_ = *std::min_element(offset_m_.begin(), offset_m_.end());
   offset_max_m_ = *std::max_element(offset_m_.begin(), offset_m_.end());
 
@@ -220,6 +222,58 @@ VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& m
     while (first < nc && sorted_az_[first] < start) ++first;
     bucket_[b] = static_cast<int>(first);
   }
+  set_motion(motion);
+}
+
+void VisibilityQuery::set_motion(const Motion& motion) {
+  if (!motion.velocity_mps.allFinite() || !motion.angular_velocity_radps.allFinite()) {
+    throw InputError("visibility query: the sensor motion of the scan at " +
+                     std::to_string(scan_->stamp_ns) +
+                     " ns is not finite (velocity or angular velocity holds NaN/inf)");
+  }
+  const auto& stamps = scan_->column_stamp_ns;
+  if (motion.still() || stamps.size() != static_cast<std::size_t>(columns_)) return;
+  double sweep_s = 0.0;
+  for (const std::int64_t t : stamps) {
+    sweep_s = std::max(sweep_s, std::abs(1e-9 * static_cast<double>(t - scan_->stamp_ns)));
+  }
+  // Every column at the scan's stamp; or stamps that are no revolution's (a scan built without
+  // times keeps zeros): without times the columns cannot be placed on the path.
+  constexpr double kLongestSweepS = 1.0;
+  if (!(sweep_s > 0.0) || sweep_s > kLongestSweepS) return;
+  moving_ = true;
+  sweep_s_ = sweep_s;
+  velocity_ = motion.velocity_mps;
+  spin_rate_ = motion.angular_velocity_radps.norm();
+  if (spin_rate_ > 0.0) {
+    const Eigen::Vector3d axis = motion.angular_velocity_radps / spin_rate_;
+    Eigen::Matrix3d k;
+    k << 0.0, -axis.z(), axis.y(), axis.z(), 0.0, -axis.x(), -axis.y(), axis.x(), 0.0;
+    spin_a_ = k * world_R_sensor_;
+    spin_b_ = k * spin_a_;
+  }
+}
+
+VisibilityQuery::Frame VisibilityQuery::column_frame(int column) const {
+  if (!moving_) return {world_R_sensor_, world_t_sensor_};
+  const double dt =
+      1e-9 * static_cast<double>(scan_->column_stamp_ns[static_cast<std::size_t>(column)] -
+                                 scan_->stamp_ns);
+  const double a = spin_rate_ * dt;
+  double sin_a = 0.0;
+  double one_minus_cos_a = 0.0;
+  if (std::abs(a) < 0.25) {
+    // Series to the a^7 / a^8 terms (error below 1e-11 here): a turn within one revolution is
+    // small, and this is cheaper than sin and cos for every beam of a box.
+    const double a2 = a * a;
+    sin_a = a * (1.0 - a2 / 6.0 * (1.0 - a2 / 20.0 * (1.0 - a2 / 42.0)));
+    one_minus_cos_a = 0.5 * a2 * (1.0 - a2 / 12.0 * (1.0 - a2 / 30.0 * (1.0 - a2 / 56.0)));
+  } else {
+    sin_a = std::sin(a);
+    one_minus_cos_a = 1.0 - std::cos(a);
+  }
+  return {world_R_sensor_ + sin_a * spin_a_ + one_minus_cos_a * spin_b_,
+          world_t_sensor_ + dt * velocity_};
 }
 
 std::optional<int> VisibilityQuery::column_of_azimuth(double azimuth_rad) const {
@@ -288,7 +342,29 @@ std::optional<int> VisibilityQuery::ring_of_sensor_point(const Eigen::Vector3d& 
 
 std::optional<VisibilityQuery::Located> VisibilityQuery::locate(
     const Eigen::Vector3d& world_point) const {
-  const Eigen::Vector3d p = sensor_R_world_ * world_point + sensor_t_world_;
+  if (!moving_) return locate_sensor_point(sensor_R_world_ * world_point + sensor_t_world_);
+  // The column the point falls in seen from the scan's pose, then from that column's pose, until
+  // the column's own pose confirms it (within a column or so: the pose barely moves from one
+  // column to the next). At the seam of a turning sensor no column may confirm it: a turn
+  // against the spin leaves a wedge no beam swept, which is unknown.
+  std::optional<Located> loc = locate_sensor_point(sensor_R_world_ * world_point + sensor_t_world_);
+  const auto& stamps = scan_->column_stamp_ns;
+  const double column_s = sweep_s_ / static_cast<double>(std::max(1, columns_ - 1));
+  for (int step = 0; step < 4 && loc; ++step) {
+    const Frame f = column_frame(loc->column);
+    const auto next = locate_sensor_point(f.world_R_sensor.transpose() * (world_point - f.world_t_sensor));
+    if (!next) return next;
+    const double apart_s =
+        1e-9 * std::abs(static_cast<double>(stamps[static_cast<std::size_t>(next->column)] -
+                                            stamps[static_cast<std::size_t>(loc->column)]));
+    if (apart_s <= 2.0 * column_s) return next;
+    loc = next;
+  }
+  return std::nullopt;
+}
+
+std::optional<VisibilityQuery::Located> VisibilityQuery::locate_sensor_point(
+    const Eigen::Vector3d& p) const {
   const auto ring = ring_of_sensor_point(p);
   if (!ring) return std::nullopt;
   const auto r = static_cast<std::size_t>(*ring);
@@ -331,6 +407,24 @@ PointProbe VisibilityQuery::probe(const Eigen::Vector3d& world_point, double mar
           returned ? scan_->range_m(i) - loc->distance_m : 0.0};
 }
 
+bool VisibilityQuery::sees_through(const Eigen::Vector3d& point, double margin_m,
+                                   double lateral_m, double clearance_m) const {
+  const PointProbe p = probe(point, margin_m);
+  if (p.visibility != Visibility::kFree || p.lateral_m > lateral_m) return false;
+  // A descending beam that passes h above a point on the ground lands on the ground h / tan(its
+  // depression) beyond it: at grazing angles that is metres, and the ground would be seen
+  // "free" though nothing moved. Such a beam proves free space only when it ends farther.
+  if (p.beam_direction_z < 0.0 && p.beam_above_m > 0.0) {
+    const double sine = -p.beam_direction_z;
+    const double run_per_drop = std::sqrt(std::max(0.0, 1.0 - sine * sine)) / sine;
+    if (p.beyond_m <= margin_m + p.beam_above_m * run_per_drop) return false;
+  }
+  const Box3 around{(point.array() - clearance_m).cast<float>(),
+                    (point.array() + clearance_m).cast<float>()};
+  const VisibilityCounts beams = in_box(around, margin_m);
+  return beams.occupied == 0 && beams.occluded == 0;
+}
+
 BeamRay VisibilityQuery::cell_ray(int ring, int column) const {
   const auto r = static_cast<std::size_t>(ring);
   const auto c = static_cast<std::size_t>(column);
@@ -338,7 +432,11 @@ BeamRay VisibilityQuery::cell_ray(int ring, int column) const {
   const double ca = cos_az_[c] * cos_az_off_[r] - sin_az_[c] * sin_az_off_[r];
   const double sa = sin_az_[c] * cos_az_off_[r] + cos_az_[c] * sin_az_off_[r];
   const Eigen::Vector3d d(cos_el_[r] * ca, cos_el_[r] * sa, sin_el_[r]);
-  return {world_R_sensor_.col(2) * offset_m_[r] + world_t_sensor_, world_R_sensor_ * d};
+  if (!moving_) {
+    return {world_R_sensor_.col(2) * offset_m_[r] + world_t_sensor_, world_R_sensor_ * d};
+  }
+  const Frame f = column_frame(column);
+  return {f.world_R_sensor.col(2) * offset_m_[r] + f.world_t_sensor, f.world_R_sensor * d};
 }
 
 template <typename Visit>
@@ -347,6 +445,13 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
   if (world_box.empty() || !world_box.min.allFinite() || !world_box.max.allFinite()) return;
   const Eigen::Vector3d lo = world_box.min.cast<double>();
   const Eigen::Vector3d hi = world_box.max.cast<double>();
+  // A moving sensor's beams start up to `reach` from the scan pose's origin and point up to
+  // `turn` away from its directions: candidates come from the box grown by the reach, in an
+  // azimuth and elevation band widened by the turn; the exact slab test below decides.
+  const double reach = moving_ ? velocity_.norm() * sweep_s_ : 0.0;
+  const double turn = moving_ ? spin_rate_ * sweep_s_ : 0.0;
+  const Eigen::Vector3d grown_lo = lo.array() - reach;
+  const Eigen::Vector3d grown_hi = hi.array() + reach;
 
   // The box's corners in the sensor frame bound the beams that can reach it.
   std::array<Eigen::Vector3d, 8> corner;
@@ -355,8 +460,9 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
   double z_max = -z_min;
   double rho_max = 0.0;
   for (int k = 0; k < 8; ++k) {
-    const Eigen::Vector3d w((k & 1) ? hi.x() : lo.x(), (k & 2) ? hi.y() : lo.y(),
-                            (k & 4) ? hi.z() : lo.z());
+    const Eigen::Vector3d w((k & 1) ? grown_hi.x() : grown_lo.x(),
+                            (k & 2) ? grown_hi.y() : grown_lo.y(),
+                            (k & 4) ? grown_hi.z() : grown_lo.z());
     const auto ku = static_cast<std::size_t>(k);
     corner[ku] = sensor_R_world_ * w + sensor_t_world_;
     corner_az[ku] = wrap_two_pi(std::atan2(corner[ku].y(), corner[ku].x()));
@@ -376,8 +482,13 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
       az_start = sorted[k + 1];
     }
   }
-  const bool all_azimuths = widest <= std::numbers::pi;
-  const double az_span = kTwoPi - widest;
+  // A turn of `turn` moves a direction's azimuth by at most turn / cos(elevation) (small turns).
+  const double steepest = max_abs_elevation_rad_ + turn;
+  const double turn_az = turn == 0.0 ? 0.0 : 1.01 * turn / std::cos(std::min(steepest, 1.4));
+  const bool all_azimuths =
+      widest <= std::numbers::pi || (turn > 0.0 && (steepest >= 1.4 || widest <= 2.0 * turn_az));
+  az_start -= turn_az;
+  const double az_span = kTwoPi - widest + 2.0 * turn_az;
   // Nearest horizontal distance of the box to the z axis: its footprint's boundary lies on the
   // projected edges.
   double rho_min = 0.0;
@@ -394,8 +505,8 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
   // Elevation band over every beam origin (the lowest origin sees the box highest).
   const double dz_hi = z_max - offset_min_m_;
   const double dz_lo = z_min - offset_max_m_;
-  const double el_max = std::atan2(dz_hi, dz_hi > 0.0 ? rho_min : rho_max) + kSlackRad;
-  const double el_min = std::atan2(dz_lo, dz_lo < 0.0 ? rho_min : rho_max) - kSlackRad;
+  const double el_max = std::atan2(dz_hi, dz_hi > 0.0 ? rho_min : rho_max) + turn + kSlackRad;
+  const double el_min = std::atan2(dz_lo, dz_lo < 0.0 ? rho_min : rho_max) - turn - kSlackRad;
 
   const auto n = sorted_az_.size();
   for (int r = 0; r < rings_; ++r) {

@@ -70,11 +70,22 @@ struct PointProbe {
 /// Answers visibility questions about world points and boxes from one organized scan taken at a
 /// pose (sensor in world). Holds a reference to the scan, which must outlive the query.
 /// Construction is O(columns log columns); queries do not allocate (except cells_in_box's output).
+///
+/// A moving sensor measures each column from where it was at that column's time. Given the
+/// sensor's motion (and the scan's column_stamp_ns), every beam starts from the sensor's pose at
+/// its column's stamp, `pose` being the pose at scan.stamp_ns: at 5 m/s and 1.25 rad/s one
+/// revolution moves the beams by 0.5 m and 7 degrees, far more than the margins the tests use.
+/// The scan's points are then taken as motion-compensated to `pose` (pipeline::deskew_scan,
+/// which keeps the ranges as measured): world_point() uses `pose`, the range comparisons the
+/// column's own pose.
 class VisibilityQuery {
  public:
   /// Precomputes world->sensor, per-ring beam geometry and the column lookup. Throws InputError
   /// when the scan does not match the model (rings, column azimuths) or the pose is not finite.
-  VisibilityQuery(const OrganizedScan& scan, const SensorModel& model, const Pose& pose);
+  /// A motion that is still, not finite, or a scan without one stamp per column: every column
+  /// at `pose`.
+  VisibilityQuery(const OrganizedScan& scan, const SensorModel& model, const Pose& pose,
+                  const Motion& motion = {});
 
   /// Verdict of the scan about one world point; margin_m >= 0 is the range tolerance in metres.
   [[nodiscard]] Visibility at(const Eigen::Vector3d& world_point, double margin_m) const;
@@ -91,6 +102,13 @@ class VisibilityQuery {
   [[nodiscard]] std::optional<std::size_t> cell_of(const Eigen::Vector3d& world_point) const;
   /// Distance from the point to the beam origin of the ring of cell_of (nothing outside the FOV).
   [[nodiscard]] std::optional<double> beam_distance(const Eigen::Vector3d& world_point) const;
+  /// True when this scan saw through a point from its viewpoint: the point's nearest beam passes
+  /// within lateral_m of it and ends more than margin_m beyond it (a descending beam that passes
+  /// over a point on the ground must also end beyond where it meets the ground there), and no
+  /// beam through the cube of half side clearance_m around the point ends inside or before it
+  /// (from another viewpoint the nearest beam may pass just beside a thin pole and see past it).
+  [[nodiscard]] bool sees_through(const Eigen::Vector3d& point, double margin_m, double lateral_m,
+                                  double clearance_m) const;
   /// Verdicts of every beam that passes through the box (rays are half-lines from their origin).
   [[nodiscard]] VisibilityCounts in_box(const Box3& world_box, double margin_m) const;
   /// Like in_box, listing each beam; out is cleared first. Order: by ring, then by azimuth.
@@ -109,6 +127,8 @@ class VisibilityQuery {
 
   /// The sensor's position in the world (the pose's translation).
   [[nodiscard]] const Eigen::Vector3d& sensor_position() const { return world_t_sensor_; }
+  /// True when the beams start from per-column poses (a moving sensor, see the class comment).
+  [[nodiscard]] bool per_column_poses() const { return moving_; }
   /// The scan this query answers from.
   [[nodiscard]] const OrganizedScan& scan() const { return *scan_; }
 
@@ -118,6 +138,15 @@ class VisibilityQuery {
     int column;
     double distance_m;
   };
+  // The sensor in the world when it fired one column.
+  struct Frame {
+    Eigen::Matrix3d world_R_sensor;
+    Eigen::Vector3d world_t_sensor;
+  };
+  void set_motion(const Motion& motion);
+  [[nodiscard]] Frame column_frame(int column) const;
+  // Ring, column and beam distance of a point given in the frame of the sensor that fired.
+  [[nodiscard]] std::optional<Located> locate_sensor_point(const Eigen::Vector3d& p) const;
   [[nodiscard]] std::optional<Located> locate(const Eigen::Vector3d& world_point) const;
   template <typename Visit>
   void visit_box(const Box3& world_box, double margin_m, Visit&& visit) const;
@@ -132,6 +161,7 @@ class VisibilityQuery {
   // Per ring.
   std::vector<double> elevation_rad_, cos_el_, sin_el_, offset_m_, az_offset_rad_, cos_az_off_,
       sin_az_off_, accept_below_rad_, accept_above_rad_;
+  double max_abs_elevation_rad_{0.0};
   double offset_min_m_{0.0};
   double offset_max_m_{0.0};
   // Per column: cos/sin of its azimuth.
@@ -141,6 +171,15 @@ class VisibilityQuery {
   std::vector<int> sorted_column_;
   std::vector<int> bucket_;
   double nominal_step_rad_{0.0};
+  // Motion during the sweep (moving_ only): the column's rotation is world_R_sensor_ +
+  // sin(a) spin_a_ + (1 - cos(a)) spin_b_ for the angle a = spin_rate_ * dt (Rodrigues, the
+  // axis' cross-product matrix K folded in: spin_a_ = K R, spin_b_ = K^2 R).
+  bool moving_{false};
+  Eigen::Vector3d velocity_{Eigen::Vector3d::Zero()};
+  Eigen::Matrix3d spin_a_{Eigen::Matrix3d::Zero()};
+  Eigen::Matrix3d spin_b_{Eigen::Matrix3d::Zero()};
+  double spin_rate_{0.0};
+  double sweep_s_{0.0};  // largest |column stamp - scan stamp|
 };
 
 }  // namespace ringtrack::core

@@ -75,16 +75,6 @@ bool same_view(const LoggedScan& logged, const core::OrganizedScan& now, const c
          logged.pose.near(pose, kShiftM, kTurnRad);
 }
 
-// A descending beam that passes h above a point on the ground lands on the ground h / tan(its
-// depression) beyond it: at grazing angles that is metres, and the ground would be seen "free"
-// though nothing moved. Such a beam proves free space only when it ends farther than that.
-bool grazes_ground(const core::PointProbe& probe, double margin_m) {
-  if (probe.beam_direction_z >= 0.0 || probe.beam_above_m <= 0.0) return false;
-  const double sine = -probe.beam_direction_z;
-  const double run_per_drop = std::sqrt(std::max(0.0, 1.0 - sine * sine)) / sine;
-  return probe.beyond_m <= margin_m + probe.beam_above_m * run_per_drop;
-}
-
 }  // namespace
 
 void LoggedScan::update_bounds() {
@@ -355,17 +345,6 @@ void DynamicObjectFilter::mark_candidates(LoggedScan& logged, const core::Organi
   }
 }
 
-bool DynamicObjectFilter::clear_around(const core::VisibilityQuery& visibility,
-                                       const Eigen::Vector3f& point) const {
-  // From another viewpoint the one beam nearest a point may pass just beside a thin object (the
-  // edge of a pole, a branch) and see past it: every beam through the space around the point
-  // must see past it, none may end there or before it (the pole's near side hides its far one).
-  const auto r = static_cast<float>(config_.free_space_clearance_m);
-  const core::Box3 around{point.array() - r, point.array() + r};
-  const auto beams = visibility.in_box(around, config_.free_space_margin_m);
-  return beams.occupied == 0 && beams.occluded == 0;
-}
-
 void DynamicObjectFilter::clear_seen_through(LoggedScan& logged,
                                              const core::VisibilityQuery& visibility,
                                              const core::Pose& pose, bool moved_too) {
@@ -384,12 +363,9 @@ void DynamicObjectFilter::clear_seen_through(LoggedScan& logged,
         continue;
       }
     } else {
-      const auto probe =
-          visibility.probe(logged.points[i].cast<double>(), config_.free_space_margin_m);
-      if (probe.visibility != core::Visibility::kFree ||
-          probe.lateral_m > config_.free_space_lateral_m ||
-          grazes_ground(probe, config_.free_space_margin_m) ||
-          !clear_around(visibility, logged.points[i])) {
+      if (!visibility.sees_through(logged.points[i].cast<double>(), config_.free_space_margin_m,
+                                   config_.free_space_lateral_m,
+                                   config_.free_space_clearance_m)) {
         continue;
       }
     }

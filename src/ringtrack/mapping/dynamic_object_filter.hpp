@@ -129,9 +129,6 @@ class DynamicObjectFilter {
   void mark_candidates(LoggedScan& logged, const core::OrganizedScan& scan,
                        const std::vector<std::uint8_t>* segments,
                        const std::vector<tracking::Hypothesis>& hypotheses);
-  // Whether no beam of the visibility query ends within free_space_clearance_m of the point.
-  [[nodiscard]] bool clear_around(const core::VisibilityQuery& visibility,
-                                  const Eigen::Vector3f& point) const;
   // Removes the candidates of a logged scan that the newest scan (seen through the visibility
   // query, taken at pose) sees through; from another viewpoint only when moved_too.
   void clear_seen_through(LoggedScan& logged, const core::VisibilityQuery& visibility,

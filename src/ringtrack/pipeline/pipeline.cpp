@@ -46,7 +46,8 @@ Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
       completer_(config.detection),
       tracker_(config.tracking),
       filter_(config.mapping),
-      background_(model_, config.background) {
+      background_(model_, config.background),
+      recent_views_(model_, config.background) {
   core::validate_config(config);
   model_.validate();
 }
@@ -75,15 +76,13 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   // (Nothing is learned when sparse detections are switched off: nothing would use it.)
   const bool sparse_on = config_.detection.sparse_min_points < config_.detection.min_cluster_points;
   const bool resting = sparse_on && track_rest(pose);
-  // A moving sensor has no such memory yet: what earlier scans saw from other viewpoints says
-  // little about single far points (docs/BENCHMARK.md, issue 10).
-  const core::SceneMemory* memory = resting && background_.scans() > 0 ? &background_ : nullptr;
-  const auto& detections =
-      completer_.complete(scan, pose, detector_.detect(scan, labels_, pose, predictions, memory));
-  if (resting) background_.update(scan);
+  const core::Motion motion = sweep_motion(scan, pose);
+  const auto& detections = completer_.complete(
+      scan, pose, detector_.detect(scan, labels_, pose, predictions, scene_memory(resting)));
+  if (sparse_on) remember(scan, pose, motion, resting);
   const auto t2 = Clock::now();
   // What this scan sees of the space hypotheses occupied (free-space tests; docs/visibility.md).
-  const core::VisibilityQuery visibility(scan, model_, pose);
+  const core::VisibilityQuery visibility(scan, model_, pose, motion);
   const auto& hypotheses = tracker_.update(detections, scan.stamp_ns, &visibility);
   const auto t3 = Clock::now();
   const auto& filtered =
@@ -101,7 +100,36 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   result_.times = {elapsed_ms(t0, t1), elapsed_ms(t1, t2), elapsed_ms(t2, t3), elapsed_ms(t3, t4),
                    elapsed_ms(t0, t4)};
   result_.pose = pose;
+  previous_pose_ = pose;
   return result_;
+}
+
+const core::SceneMemory* Pipeline::scene_memory(bool resting) const {
+  if (resting) return background_.scans() > 0 ? &background_ : nullptr;
+  return config_.background.moving_memory && recent_views_.scans() > 0 ? &recent_views_ : nullptr;
+}
+
+void Pipeline::remember(const core::OrganizedScan& scan, const core::Pose& pose,
+                        const core::Motion& motion, bool resting) {
+  if (resting) {
+    background_.update(scan);
+    // What the sensor saw before it came to rest is stale by the time it moves on.
+    recent_views_.reset();
+  } else if (config_.background.moving_memory) {
+    recent_views_.add(scan, pose, motion);
+  }
+}
+
+core::Motion Pipeline::sweep_motion(const core::OrganizedScan& scan,
+                                    const core::Pose& pose) const {
+  // A scan without column times was measured all at once (or its times are lost): nothing to
+  // spread over the sweep. After a long gap (skipped scans) the old motion says little.
+  constexpr std::int64_t kLongestGapNs = 1'000'000'000;
+  if (!previous_pose_ || scan.column_stamp_ns.empty() ||
+      pose.stamp_ns - previous_pose_->stamp_ns > kLongestGapNs) {
+    return {};
+  }
+  return core::Motion::between(*previous_pose_, pose);
 }
 
 void Pipeline::predicted_track_boxes(std::int64_t stamp_ns) {

@@ -13,6 +13,7 @@
 #include "ringtrack/core/detection.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
+#include "ringtrack/core/recent_views.hpp"
 #include "ringtrack/detection/completion.hpp"
 #include "ringtrack/detection/detector.hpp"
 #include "ringtrack/mapping/dynamic_object_filter.hpp"
@@ -104,6 +105,16 @@ class Pipeline {
   tracking::Tracker tracker_;
   mapping::DynamicObjectFilter filter_;
   core::BackgroundRangeModel background_;
+  core::RecentViews recent_views_;  // a moving sensor's memory (background.moving_memory)
+  /// The scene memory for this scan's sparse detections (nothing when there is none yet), and
+  /// learns this scan into it afterwards (remember()).
+  [[nodiscard]] const core::SceneMemory* scene_memory(bool resting) const;
+  void remember(const core::OrganizedScan& scan, const core::Pose& pose,
+                const core::Motion& motion, bool resting);
+  /// The sensor's motion during this scan, taken as the motion from the previous scan's pose.
+  [[nodiscard]] core::Motion sweep_motion(const core::OrganizedScan& scan,
+                                          const core::Pose& pose) const;
+  std::optional<core::Pose> previous_pose_;  // of the last processed scan
   std::optional<core::Pose> rest_pose_;  // where the sensor came to rest (background's pose)
   std::vector<std::uint8_t> labels_;
   FrameResult result_;

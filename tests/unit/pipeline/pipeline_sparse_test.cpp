@@ -1,5 +1,6 @@
 // Far people hit by one or two beams: with a resting sensor the pipeline learns the background
-// and keeps their clusters (sparse detections), so they are tracked; a moving sensor forgets it.
+// and keeps their clusters (sparse detections), so they are tracked; a moving sensor asks its
+// recent scans instead.
 
 #include <gtest/gtest.h>
 
@@ -14,7 +15,7 @@ namespace {
 
 // An empty field and one slim person (0.45 m wide) walking across the view 60 m away: one ring
 // (at hip height) hits them, in one column (measured: every scan with hits has one).
-sim::Scenario far_walker() {
+sim::Scenario far_walker(double distance_m = 60.0) {
   sim::Scenario s;
   s.name = "far-walker";
   s.duration_s = 14.0;
@@ -24,7 +25,7 @@ sim::Scenario far_walker() {
   sim::ScriptedActor walker;
   walker.id = 1;
   walker.width_m = 0.45;
-  walker.waypoints = {{2.0, {60.0, -8.0, 0.0}}, {14.0, {60.0, 8.0, 0.0}}};
+  walker.waypoints = {{2.0, {distance_m, -8.0, 0.0}}, {14.0, {distance_m, 8.0, 0.0}}};
   s.scripted.push_back(walker);
   return s;
 }
@@ -81,19 +82,22 @@ TEST(PipelineSparse, FarPersonHitByOneBeamIsTrackedOnceTheBackgroundIsLearned) {
       << without.tracked << " of " << without.scans_with_hits;
 }
 
-TEST(PipelineSparse, AMovingSensorLearnsNoBackground) {
-  auto scenario = sim::with_moving_sensor(far_walker());
-  sim::Simulator simulator(scenario, 3);
-  Pipeline pipeline(core::Config{}, simulator.model());
-  sim::SimulatedScan scan;
-  std::size_t sparse = 0;
-  for (std::int64_t k = 0; k < 60; ++k) {
-    simulator.next(scan);
-    const auto& result = pipeline.process(scan.scan, scan.pose);
-    for (const auto& d : result.detections) sparse += d.sparse ? 1 : 0;
-    EXPECT_EQ(pipeline.background().scans(), 0) << "scan " << k;
-  }
-  EXPECT_EQ(sparse, 0u);
+TEST(PipelineSparse, AMovingSensorAsksItsRecentViewsInstead) {
+  // From the figure 8 nothing is learned per cell (every scan sees from elsewhere); the scans 5,
+  // 10 and 20 back tell where they saw through the walker's place (core::RecentViews). At 40 m
+  // the figure 8's tilts move the rings by a metre there, so an earlier beam passes within 5 cm
+  // of a hit only now and then (measured: tracked in 37 of 94 scans with hits, 28 without the
+  // memory; at 60 m 0 and 0, at 25 m 48 and 48: there the walker has points enough).
+  const auto scenario = sim::with_moving_sensor(far_walker(40.0));
+  const auto with = run(scenario, core::Config{});
+  core::Config forgetful;
+  forgetful.background.moving_memory = false;
+  const auto without = run(scenario, forgetful);
+  EXPECT_EQ(with.background_scans, 0);
+  EXPECT_EQ(without.background_scans, 0);
+  EXPECT_EQ(without.sparse, 0u);
+  EXPECT_GT(with.sparse, 0u);
+  EXPECT_GT(with.tracked, without.tracked);
 }
 
 TEST(PipelineSparse, TheBackgroundStartsAgainWhereTheSensorComesToRest) {

@@ -1,0 +1,63 @@
+#include "ringtrack/core/recent_views.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "ringtrack/core/error.hpp"
+
+namespace ringtrack::core {
+
+RecentViews::RecentViews(const SensorModel& model, const BackgroundRangeConfig& config)
+    : model_(model), lateral_m_(config.moving_lateral_m), clearance_m_(config.moving_clearance_m) {
+  if (config.moving_lag_scans < 1 || config.moving_lag_scans > 250) {
+    throw ConfigError("background.moving_lag_scans must lie in [1, 250], got " +
+                      std::to_string(config.moving_lag_scans));
+  }
+  if (!(lateral_m_ >= 0.0) || !std::isfinite(lateral_m_)) {
+    throw ConfigError("background.moving_lateral_m must be finite and >= 0");
+  }
+  if (!(clearance_m_ >= 0.0) || !std::isfinite(clearance_m_)) {
+    throw ConfigError("background.moving_clearance_m must be finite and >= 0");
+  }
+  // Doubling lags: a walker has left its place by the first, a slow one by the last.
+  lags_ = {config.moving_lag_scans, 2 * config.moving_lag_scans, 4 * config.moving_lag_scans};
+  views_.resize(static_cast<std::size_t>(lags_.back()));
+}
+
+void RecentViews::add(const OrganizedScan& scan, const Pose& pose, const Motion& motion) {
+  View& view = views_[next_];
+  view.query.reset();  // it points at the scan about to be overwritten
+  view.scan = scan;    // same size as before: the buffers are reused, nothing is allocated
+  view.query.emplace(view.scan, model_, pose, motion);
+  next_ = (next_ + 1) % views_.size();
+  count_ = std::min(count_ + 1, views_.size());
+}
+
+void RecentViews::reset() {
+  for (auto& view : views_) view.query.reset();
+  next_ = 0;
+  count_ = 0;
+}
+
+const RecentViews::View* RecentViews::view_back(int lag) const {
+  // The newest view is the previous scan (lag 1).
+  const auto back = static_cast<std::size_t>(lag);
+  if (back > count_) return nullptr;
+  return &views_[(next_ + views_.size() - back) % views_.size()];
+}
+
+bool RecentViews::seen_free_before(const OrganizedScan& scan, std::size_t cell,
+                                   const Eigen::Vector3d& world_point, double margin_m) const {
+  static_cast<void>(scan);
+  static_cast<void>(cell);
+  for (const int lag : lags_) {
+    const View* view = view_back(lag);
+    if (view == nullptr) break;
+    if (view->query->sees_through(world_point, margin_m, lateral_m_, clearance_m_)) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace ringtrack::core
