@@ -180,7 +180,7 @@ struct BackgroundRangeConfig {
   /// The scans this many scans back, twice and four times as far back are asked.
   int moving_lag_scans{5};
   /// An earlier scan's beam decides about a point passing this close to it (m) ...
-  double moving_lateral_m{0.05};
+  double moving_lateral_m{0.1};
   /// ... and none of its beams through the cube of this half side around the point may end
   /// inside or before the cube (m).
   double moving_clearance_m{0.1};
