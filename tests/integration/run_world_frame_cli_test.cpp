@@ -4,12 +4,11 @@
 
 #include <gtest/gtest.h>
 
-#include <nlohmann/json.hpp>
-
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 
@@ -39,8 +38,8 @@ void shift_poses(const fs::path& path) {
     double t = 0, x = 0, y = 0, z = 0, qx = 0, qy = 0, qz = 0, qw = 0;
     fields >> t >> x >> y >> z >> qx >> qy >> qz >> qw;
     char row[256];
-    std::snprintf(row, sizeof row, "%.9f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", t,
-                  x + kShift.x(), y + kShift.y(), z + kShift.z(), qx, qy, qz, qw);
+    std::snprintf(row, sizeof row, "%.9f %.6f %.6f %.6f %.9f %.9f %.9f %.9f\n", t, x + kShift.x(),
+                  y + kShift.y(), z + kShift.z(), qx, qy, qz, qw);
     text += row;
   }
   in.close();
@@ -95,9 +94,11 @@ class RunCliWorldFrame : public ::testing::Test {
 std::string RunCliWorldFrame::dir_;
 
 TEST_F(RunCliWorldFrame, UtmShiftedPosesGiveTheSameTracksInTheUsersFrame) {
-  const auto near = run_command(kCli + " run " + dir_ + "/near --out " + dir_ + "/out-near --no-plots");
+  const auto near =
+      run_command(kCli + " run " + dir_ + "/near --out " + dir_ + "/out-near --no-plots");
   ASSERT_EQ(near.exit_code, 0) << near.err;
-  const auto utm = run_command(kCli + " run " + dir_ + "/utm --out " + dir_ + "/out-utm --no-plots");
+  const auto utm =
+      run_command(kCli + " run " + dir_ + "/utm --out " + dir_ + "/out-utm --no-plots");
   ASSERT_EQ(utm.exit_code, 0) << utm.err;
   EXPECT_EQ(near.out.find("frame  "), std::string::npos) << near.out;
   EXPECT_NE(utm.out.find("local frame at origin (500000.000, 5000000.000, 100.000) m"),

@@ -65,12 +65,13 @@ inline constexpr std::size_t kSubBins = 4;
 ///
 /// Object model (world frame, each part of a split cluster on its own): vertical extent in
 /// [min_height_m, max_height_m], horizontal box diagonal <= max_diagonal_m, lowest point <=
-/// max_altitude_m above the ground (set_ground_z). The minimum-height test is skipped for clusters with a point in the top or
-/// bottom ring and credits the extent with range * tan(min_height_ring_gap_deg) (sparse rings
-/// under-sample height). A cluster that fails this strict model but whose centroid lies within
-/// relaxed_radius_m (horizontally) of a predicted track position is tested without the minimum
-/// height and with relaxed_max_diagonal_m; it is flagged relaxed. Clusters with fewer than
-/// min_cluster_points but at least relaxed_min_cluster_points points can be accepted this way.
+/// max_altitude_m above the ground (set_ground_z). The minimum-height test is skipped for clusters
+/// with a point in the top or bottom ring and credits the extent with range *
+/// tan(min_height_ring_gap_deg) (sparse rings under-sample height). A cluster that fails this
+/// strict model but whose centroid lies within relaxed_radius_m (horizontally) of a predicted track
+/// position is tested without the minimum height and with relaxed_max_diagonal_m; it is flagged
+/// relaxed. Clusters with fewer than min_cluster_points but at least relaxed_min_cluster_points
+/// points can be accepted this way.
 ///
 /// Sparse detections: given a scene memory (core::SceneMemory; the pipeline passes the
 /// background range model of a resting sensor), a cluster with fewer than
@@ -134,7 +135,7 @@ class Detector {
   core::Detection& next_detection();
 
   core::DetectionConfig config_;
-  double ground_z_m_{0.0};  // max_altitude_m counts from here
+  double ground_z_m_{0.0};              // max_altitude_m counts from here
   float join_threshold_{0};             // theta, squared for the Euclidean rule
   float min_height_gap_tan_{0};         // tan(min_height_ring_gap_deg)
   int offsets_columns_{-1};             // column count offsets_ was built for

@@ -74,11 +74,13 @@ class Pipeline {
   /// The model is the sensor's that took the scans: the free-space tests follow its beams.
   Pipeline(const core::Config& config, core::SensorModel model);
 
-  /// Processes one scan taken at `pose` (sensor in world). A scan whose stamp is not after the
-  /// previous processed one's is skipped, not processed (the tracker's filters cannot run
+  /// Processes one scan taken at `world_pose` (sensor in world). A scan whose stamp is not after
+  /// the previous processed one's is skipped, not processed (the tracker's filters cannot run
   /// backwards, and a repeated scan would count as a second observation): the result says so
-  /// and why, and skipped_scans() counts it; later scans continue the tracks.
-  const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& pose);
+  /// and why, and skipped_scans() counts it; later scans continue the tracks. Throws
+  /// core::InputError for a pose with a non-finite position or farther than the local frame
+  /// allows from origin() (kMaxLocalDistanceM, less for voxels under 5 cm).
+  const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& world_pose);
   /// Processes a scan of a sensor without a pose source: the odometry (config.odometry) estimates
   /// its pose and motion-compensates the scan in place, leaving out the points of the objects
   /// tracked so far (predicted to this scan), and the scan is then processed with that pose.

@@ -78,7 +78,8 @@ sim::Scenario short_park(bool moving) {
 }
 
 // Tracks and map of the shifted run equal the near-origin run's once the shift is taken off.
-void expect_same_outputs(const RunOutput& near, const RunOutput& far, const Eigen::Vector3d& shift) {
+void expect_same_outputs(const RunOutput& near, const RunOutput& far,
+                         const Eigen::Vector3d& shift) {
   ASSERT_EQ(near.tracks.size(), far.tracks.size());
   std::size_t compared = 0;
   for (std::size_t k = 0; k < near.tracks.size(); ++k) {
@@ -115,8 +116,7 @@ TEST(PipelineWorldFrame, UtmScaleAndHighPosesGiveTheSameTracksAndMapAsNearTheOri
 // sees them rounded to 1e-10 m by the double subtraction; still the same outputs.
 TEST(PipelineWorldFrame, MovingSensorInAUtmWorldGivesTheSameTracksAndMap) {
   const sim::Scenario scenario = short_park(true);
-  expect_same_outputs(run(scenario, Eigen::Vector3d::Zero()), run(scenario, kUtmShift),
-                      kUtmShift);
+  expect_same_outputs(run(scenario, Eigen::Vector3d::Zero()), run(scenario, kUtmShift), kUtmShift);
 }
 
 // detection.max_altitude_m counts from the ground, sensor_height_m below the first sensor pose:
