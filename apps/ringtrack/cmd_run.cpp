@@ -429,9 +429,19 @@ std::unique_ptr<io::FoxgloveSink> open_mcap(const RunOptions& o, const core::Con
   return sink;
 }
 
+// The maps' header line on their frame: float32 cannot hold UTM-scale coordinates to the
+// centimetre, so the maps stay in the pipeline's local frame and say where it lies.
+std::string origin_comment(const Eigen::Vector3d& origin) {
+  char line[160];
+  std::snprintf(line, sizeof line, "origin_m %.3f %.3f %.3f (world = point + origin)", origin.x(),
+                origin.y(), origin.z());
+  return line;
+}
+
 // Writes a voxel map's points as binary PLY (x y z intensity), and as PCD beside it when
-// with_pcd; returns how many.
-std::size_t write_map(const fs::path& path, const mapping::StaticMap& map, bool with_pcd) {
+// with_pcd, in the local frame with origin (origin_comment); returns how many.
+std::size_t write_map(const fs::path& path, const mapping::StaticMap& map, bool with_pcd,
+                      const Eigen::Vector3d& origin) {
   const auto points = map.points();
   std::vector<Eigen::Vector3f> xyz;
   std::vector<float> intensity;
@@ -441,8 +451,12 @@ std::size_t write_map(const fs::path& path, const mapping::StaticMap& map, bool 
     xyz.push_back(p.position);
     intensity.push_back(p.intensity);
   }
-  io::write_ply(path, xyz, intensity);
-  if (with_pcd) io::write_pcd_points(fs::path(path).replace_extension(".pcd"), xyz, intensity);
+  const std::string comment = origin_comment(origin);
+  io::write_ply(path, xyz, intensity, io::PlyEncoding::kBinaryLittleEndian, comment);
+  if (with_pcd) {
+    io::write_pcd_points(fs::path(path).replace_extension(".pcd"), xyz, intensity,
+                         io::PcdEncoding::kBinaryCompressed, comment);
+  }
   return points.size();
 }
 
@@ -519,6 +533,31 @@ std::string skipped_note(const io::RunStatus& s) {
   return note + ")";
 }
 
+// One scan into the MCAP file, in the local frame (the clouds are float32, like the maps); the
+// frame's origin goes into the metadata with the first scan.
+void write_mcap_frame(io::FoxgloveSink& mcap, const core::OrganizedScan& scan,
+                      const core::Pose& pose, const pipeline::FrameResult& result,
+                      const pipeline::Pipeline& pipeline, std::uint64_t scans) {
+  if (scans == 1) mcap.write_metadata("frame", {{"origin_m", origin_comment(result.origin)}});
+  core::Pose local = pose;
+  local.translation -= result.origin;
+  mcap.write_frame(scan, local, result, pipeline.static_map());
+}
+
+// A warning when the altitude test rejected clusters and nothing was detected: the heights of
+// the poses' frame may not be what detection.sensor_height_m says (docs/detection.md).
+void warn_about_heights(const core::Config& config, std::uint64_t too_high,
+                        std::uint64_t detections) {
+  if (too_high == 0 || detections > 0) return;
+  std::fprintf(stderr,
+               "ringtrack: warning: no detections, and %llu clusters had their lowest point "
+               "more than detection.max_altitude_m = %g m above the ground, which is taken as "
+               "detection.sensor_height_m = %g m below the first scan's sensor: check "
+               "sensor_height_m (docs/detection.md)\n",
+               static_cast<unsigned long long>(too_high), config.detection.max_altitude_m,
+               config.detection.sensor_height_m);
+}
+
 // The run proper, once the output folder and its run.json exist; keeps `status` up to date.
 void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunStatus& status,
               SkipWarnings& warnings, RunInput& input) {
@@ -552,6 +591,8 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
   std::vector<core::Pose> poses;
   std::optional<mapping::StaticMap> raw_map;
   if (!o.no_plots) raw_map.emplace(config.mapping.voxel_size_m);
+  // Clusters the altitude test turned away, and detections: "no tracks" is then explained.
+  std::uint64_t too_high = 0, detections = 0;
   for (;;) {
     // Ctrl-C or SIGTERM: stop after the scan at hand; what follows closes every output.
     if (StopSignals::requested()) break;
@@ -581,15 +622,17 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
       rows.clear();
       for (const auto& h : result.hypotheses) {
         if (!h.reported) continue;  // unconfirmed or lost (docs/tracking.md, "What is reported")
-        rows.push_back(track_row(index, scan.stamp_ns, h));
+        rows.push_back(track_row(index, scan.stamp_ns, h, result.origin));
         track_ids.insert(h.id);
         if (h.ever_dynamic) dynamic_ids.insert(h.id);
       }
       tracks.write(rows);
       timing.write(timing_row(index, scan.stamp_ns, result.times, odometry));
       total_ms.push_back(result.times.total_ms);
+      too_high += pipeline->detector_stats().too_high;
+      detections += pipeline->detector_stats().detections;
       ++status.scans_processed;
-      if (mcap) mcap->write_frame(scan, pose, result, pipeline->static_map());
+      if (mcap) write_mcap_frame(*mcap, scan, pose, result, *pipeline, status.scans_processed);
       if (filtered) {
         filtered->hold(index, scan);
         filtered->write_released(pipeline->dynamic_filter());
@@ -616,12 +659,14 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
   timing.close();
   if (odometry_log) odometry_log->close();
 
-  const std::size_t map_voxels = write_map(out / "static_map.ply", pipeline->static_map(), true);
+  const Eigen::Vector3d origin = pipeline->origin();
+  const std::size_t map_voxels =
+      write_map(out / "static_map.ply", pipeline->static_map(), true, origin);
   io::write_tum(out / "poses.txt", poses);
   if (mcap) mcap->finish(pipeline->static_map(), scan.stamp_ns);
   bool plotted = false;
   if (raw_map) {
-    write_map(out / "raw_map.ply", *raw_map, false);
+    write_map(out / "raw_map.ply", *raw_map, false, origin);
     plotted = run_plot_script("plot_maps.py", {out, out / "maps.png"});
   }
 
@@ -634,10 +679,24 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
           ? ""
           : (" (interrupted by " + signal + ": the outputs cover these scans only)").c_str());
   std::printf("poses            %s\n", input.pose_summary(o).c_str());
+  if (!origin.isZero()) {
+    std::printf(
+        "frame            tracks.csv and poses.txt in the poses' frame; maps%s in the local frame "
+        "at origin (%.3f, %.3f, %.3f) m (docs/inputs.md, \"Frames\")\n",
+        mcap ? " and MCAP" : "", origin.x(), origin.y(), origin.z());
+  }
   if (odometry_log) print_odometry_summary(*odometry_log);
   std::printf("deskew           %s\n", input.deskew_summary().c_str());
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
   std::printf("static map       %zu voxels\n", map_voxels);
+  warn_about_heights(config, too_high, detections);
+  if (const std::size_t dropped = pipeline->static_map().dropped_points(); dropped > 0) {
+    std::fprintf(stderr,
+                 "ringtrack: warning: static map: %zu points lay outside its voxel index "
+                 "(+-2^20 voxels of mapping.voxel_size_m about the local origin) and are not in "
+                 "it\n",
+                 dropped);
+  }
   std::printf("ms per scan      median %.3f, p95 %.3f, max %.3f\n", eval::quantile(total_ms, 0.5),
               eval::quantile(total_ms, 0.95), *std::max_element(total_ms.begin(), total_ms.end()));
   std::printf(

@@ -10,16 +10,17 @@
 
 namespace ringtrack::cli {
 
-/// One tracks.csv row: a hypothesis after the update of scan `scan`.
+/// One tracks.csv row: a hypothesis after the update of scan `scan`, moved from the pipeline's
+/// local frame to the world frame by origin (pipeline::Pipeline::origin()).
 inline io::TrackRow track_row(std::uint64_t scan, std::int64_t stamp_ns,
-                              const tracking::Hypothesis& h) {
+                              const tracking::Hypothesis& h, const Eigen::Vector3d& origin) {
   io::TrackRow row;
   row.scan = scan;
   row.stamp_ns = stamp_ns;
   row.id = h.id;
-  row.position = h.reported_position;
+  row.position = h.reported_position + origin;
   row.velocity = h.velocity_mps;
-  row.box = h.box;
+  row.box = core::Box3d::shifted(h.box, origin);
   row.dynamic = h.dynamic;
   row.ever_dynamic = h.ever_dynamic;
   row.age = static_cast<std::uint32_t>(h.age_scans);
@@ -38,7 +39,7 @@ inline io::ObjectRow object_row(std::uint64_t scan, std::int64_t stamp_ns,
   row.class_name = std::string(sim::class_name(t.object_class));
   row.points = static_cast<std::uint32_t>(t.hit_points);
   row.centroid = t.centroid_m.cast<double>();
-  row.box = t.box;
+  row.box = core::Box3d::shifted(t.box, Eigen::Vector3d::Zero());
   row.true_center = t.body_center_m.cast<double>();
   row.moving = t.moving;
   return row;

@@ -10,9 +10,11 @@
 namespace ringtrack::python {
 namespace {
 
+// Positions are in the world frame of the poses, in double: the pipeline's local frame plus its
+// origin (UTM-scale worlds need more than float's 24 bits).
 struct Detection {
-  Eigen::Vector3f centroid;
-  Eigen::Vector3f box_min, box_max;
+  Eigen::Vector3d centroid;
+  Eigen::Vector3d box_min, box_max;
   std::vector<std::uint32_t> cells;
   bool relaxed{false}, sparse{false};
 };
@@ -20,7 +22,7 @@ struct Detection {
 struct Track {
   std::uint64_t id{0};
   Eigen::Vector3d position, velocity_mps;
-  Eigen::Vector3f box_min, box_max;
+  Eigen::Vector3d box_min, box_max;
   bool dynamic{false}, ever_dynamic{false}, person{false}, confirmed{false}, reported{false};
   int age_scans{0}, missed_scans{0}, hits{0};
   std::size_t points{0};
@@ -34,6 +36,7 @@ struct Frame {
   std::vector<Track> tracks;
   std::vector<std::uint32_t> removed_cells;
   std::size_t retroactive_points{0};
+  Eigen::Vector3d origin{Eigen::Vector3d::Zero()};
   pipeline::StageTimes times;
   bool skipped{false};
   std::string skip_reason;
@@ -45,14 +48,20 @@ Frame snapshot(const pipeline::FrameResult& r, const core::OrganizedScan& scan) 
   f.rings = scan.rings();
   f.columns = scan.columns();
   f.segment_labels.assign(r.segment_labels.begin(), r.segment_labels.end());
+  const Eigen::Vector3d& o = r.origin;
+  const auto world = [&o](const Eigen::Vector3f& p) -> Eigen::Vector3d {
+    return p.cast<double>() + o;
+  };
+  f.origin = o;
   for (const core::Detection& d : r.detections) {
-    f.detections.push_back({d.object_centroid(), d.box.min, d.box.max, d.indices, d.relaxed,
-                            d.sparse});
+    f.detections.push_back({world(d.object_centroid()), world(d.box.min), world(d.box.max),
+                            d.indices, d.relaxed, d.sparse});
     Detection& last = f.detections.back();
     last.cells.insert(last.cells.end(), d.completion.begin(), d.completion.end());
   }
   for (const tracking::Hypothesis& h : r.hypotheses) {
-    f.tracks.push_back({h.id, h.reported_position, h.velocity_mps, h.box.min, h.box.max,
+    f.tracks.push_back({h.id, h.reported_position + o, h.velocity_mps, world(h.box.min),
+                        world(h.box.max),
                         h.dynamic, h.ever_dynamic, h.person, h.confirmed, h.reported,
                         h.age_scans, h.missed_scans, h.hits, h.points});
   }
@@ -120,6 +129,9 @@ void bind_frame(py::module_& m) {
                                               {static_cast<py::ssize_t>(f.removed_cells.size())});
                              })
       .def_readonly("retroactive_points", &Frame::retroactive_points)
+      .def_readonly("origin", &Frame::origin,
+                    "Origin of the pipeline's local frame in the world frame (m); positions here "
+                    "are already in the world frame.")
       .def_property_readonly("times_ms",
                              [](const Frame& f) {
                                py::dict d;
@@ -197,18 +209,26 @@ void bind_pipeline(py::module_& m) {
       .def("finish", &pipeline::Pipeline::finish, py::call_guard<py::gil_scoped_release>(),
            "Moves the scans the filter still holds into the static map.")
       .def_property_readonly("skipped_scans", &pipeline::Pipeline::skipped_scans)
+      .def_property_readonly(
+          "origin", [](const pipeline::Pipeline& p) -> Eigen::Vector3d { return p.origin(); },
+          "Origin of the local frame the pipeline works in (the first pose rounded to 100 m), "
+          "in the world frame of the poses (m).")
       .def(
           "static_map",
           [](const pipeline::Pipeline& p) {
             const std::vector<mapping::MapPoint> pts = p.static_map().points();
-            py::array_t<float> xyz({static_cast<py::ssize_t>(pts.size()), py::ssize_t{3}});
+            const Eigen::Vector3d& o = p.origin();
+            py::array_t<double> xyz({static_cast<py::ssize_t>(pts.size()), py::ssize_t{3}});
             auto a = xyz.mutable_unchecked<2>();
             for (std::size_t i = 0; i < pts.size(); ++i) {
-              for (int k = 0; k < 3; ++k) a(static_cast<py::ssize_t>(i), k) = pts[i].position[k];
+              for (int k = 0; k < 3; ++k) {
+                a(static_cast<py::ssize_t>(i), k) = static_cast<double>(pts[i].position[k]) + o[k];
+              }
             }
             return xyz;
           },
-          "The static map's voxel means, (N, 3) float32, world frame (complete after finish()).");
+          "The static map's voxel means, (N, 3) float64, in the world frame of the poses "
+          "(complete after finish()).");
 }
 
 }  // namespace ringtrack::python

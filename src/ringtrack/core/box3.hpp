@@ -44,4 +44,29 @@ struct Box3 {
   [[nodiscard]] Box3 translated(const Eigen::Vector3f& t) const { return {min + t, max + t}; }
 };
 
+/// Axis-aligned box in double, for the world frame of the poses in outputs: UTM-scale
+/// coordinates need more than float's 24 bits. Default-constructed it is empty (min > max).
+struct Box3d {
+  Eigen::Vector3d min{Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity())};
+  Eigen::Vector3d max{Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity())};
+
+  /// True when no point has been added.
+  [[nodiscard]] bool empty() const { return (min.array() > max.array()).any(); }
+  /// Grows the box to contain p (a float or double 3-vector).
+  template <class Derived>
+  void extend(const Eigen::MatrixBase<Derived>& p) {
+    const Eigen::Vector3d q = p.template cast<double>();
+    min = min.cwiseMin(q);
+    max = max.cwiseMax(q);
+  }
+  /// A float box (e.g. the pipeline's local frame) shifted by offset; an empty box stays empty.
+  [[nodiscard]] static Box3d shifted(const Box3& box, const Eigen::Vector3d& offset) {
+    Box3d out;
+    if (box.empty()) return out;
+    out.min = box.min.cast<double>() + offset;
+    out.max = box.max.cast<double>() + offset;
+    return out;
+  }
+};
+
 }  // namespace ringtrack::core

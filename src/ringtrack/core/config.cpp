@@ -202,7 +202,12 @@ class Schema {
     number("max_diagonal_m", d.max_diagonal_m, 0.0, 100.0,
            "object model: largest horizontal box diagonal (m)");
     number("max_altitude_m", d.max_altitude_m, -1e6, 1e6,
-           "object model: largest world-frame z of a cluster's lowest point (m)");
+           "object model: largest height of a cluster's lowest point above the ground, taken as "
+           "sensor_height_m below the first scan's sensor (m; not the world frame's z: poses "
+           "from GNSS or a georeferenced map may be hundreds of metres up)");
+    number("sensor_height_m", d.sensor_height_m, -1e4, 1e4,
+           "height of the sensor above the ground at the first scan (m): where max_altitude_m "
+           "counts from (the built-in scenarios: 2.5; a drone's take-off mount, a car roof: ~2)");
     number("relaxed_max_diagonal_m", d.relaxed_max_diagonal_m, 0.0, 100.0,
            "relaxed model (near predicted tracks, no minimum height; max height and altitude still "
            "apply): largest horizontal diagonal (m)");

@@ -43,7 +43,9 @@ struct DetectionConfig {
   double min_height_ring_gap_deg{2.0};  // min-height test credits range*tan(this): sparse rings
                                         // under-sample height (VLP-16 ring spacing; 0 = off)
   double max_diagonal_m{1.3};           // largest horizontal box diagonal
-  double max_altitude_m{3.0};           // largest world z of the cluster's lowest point
+  double max_altitude_m{3.0};           // largest height of the cluster's lowest point above
+                                        // the ground (sensor_height_m below the first pose)
+  double sensor_height_m{2.5};          // sensor above the ground at the first scan
   double relaxed_max_diagonal_m{1.8};   // relaxed model near predicted tracks (no minimum height)
   double relaxed_radius_m{0.8};  // a cluster this close to a prediction uses the relaxed model
   double min_position_stddev_m{0.03};  // floor on each axis of a detection's covariance

@@ -410,7 +410,7 @@ void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame
   // gaps, so the extent is credited with one gap at the cluster's mean range.
   const double height_allowance = range_sum * inv_n * static_cast<double>(min_height_gap_tan_);
 
-  const bool too_high = lowest > config_.max_altitude_m;
+  const bool too_high = lowest - ground_z_m_ > config_.max_altitude_m;
   const bool too_tall = height > config_.max_height_m;
   const bool too_wide = diagonal > config_.max_diagonal_m;
   const bool too_short = !touches_top_or_bottom && height + height_allowance < config_.min_height_m;

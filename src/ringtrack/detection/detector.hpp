@@ -27,7 +27,7 @@ struct DetectorStats {
                                   ///< fewer but new to the scene (each part of a split counts)
   std::size_t splits{0};          ///< cuts made by the split step (each adds one cluster)
   std::size_t too_small{0};       ///< clusters dropped for having fewer points
-  std::size_t too_high{0};        ///< lowest point above max_altitude_m
+  std::size_t too_high{0};        ///< lowest point more than max_altitude_m above the ground
   std::size_t too_tall{0};        ///< vertical extent above max_height_m
   std::size_t too_wide{0};        ///< horizontal diagonal above the model's maximum
   std::size_t too_short{0};       ///< vertical extent (plus ring-gap allowance) below min_height_m
@@ -65,12 +65,13 @@ inline constexpr std::size_t kSubBins = 4;
 ///
 /// Object model (world frame, each part of a split cluster on its own): vertical extent in
 /// [min_height_m, max_height_m], horizontal box diagonal <= max_diagonal_m, lowest point <=
-/// max_altitude_m. The minimum-height test is skipped for clusters with a point in the top or
-/// bottom ring and credits the extent with range * tan(min_height_ring_gap_deg) (sparse rings
-/// under-sample height). A cluster that fails this strict model but whose centroid lies within
-/// relaxed_radius_m (horizontally) of a predicted track position is tested without the minimum
-/// height and with relaxed_max_diagonal_m; it is flagged relaxed. Clusters with fewer than
-/// min_cluster_points but at least relaxed_min_cluster_points points can be accepted this way.
+/// max_altitude_m above the ground (set_ground_z). The minimum-height test is skipped for clusters
+/// with a point in the top or bottom ring and credits the extent with range *
+/// tan(min_height_ring_gap_deg) (sparse rings under-sample height). A cluster that fails this
+/// strict model but whose centroid lies within relaxed_radius_m (horizontally) of a predicted track
+/// position is tested without the minimum height and with relaxed_max_diagonal_m; it is flagged
+/// relaxed. Clusters with fewer than min_cluster_points but at least relaxed_min_cluster_points
+/// points can be accepted this way.
 ///
 /// Sparse detections: given a scene memory (core::SceneMemory; the pipeline passes the
 /// background range model of a resting sensor), a cluster with fewer than
@@ -99,6 +100,10 @@ class Detector {
       const std::vector<Eigen::Vector3f>& predicted_positions_world = {},
       const core::SceneMemory* memory = nullptr);
 
+  /// Sets the z (frame of the poses) of the ground max_altitude_m counts from; default 0. The
+  /// pipeline places it sensor_height_m below its first pose, so the test follows the data
+  /// rather than the world frame's datum.
+  void set_ground_z(double z_m) { ground_z_m_ = z_m; }
   /// The detections of the last call.
   [[nodiscard]] const std::vector<core::Detection>& detections() const { return detections_; }
   /// Counters of the last call.
@@ -130,6 +135,7 @@ class Detector {
   core::Detection& next_detection();
 
   core::DetectionConfig config_;
+  double ground_z_m_{0.0};              // max_altitude_m counts from here
   float join_threshold_{0};             // theta, squared for the Euclidean rule
   float min_height_gap_tan_{0};         // tan(min_height_ring_gap_deg)
   int offsets_columns_{-1};             // column count offsets_ was built for

@@ -44,8 +44,9 @@ class CaseRecorder {
   void add_result(std::int64_t k, const pipeline::FrameResult& result, StageSeries& times) {
     for (const tracking::Hypothesis& h : result.hypotheses) {
       if (!h.reported) continue;
-      tracks_.push_back({k, static_cast<std::int64_t>(h.id), h.reported_position, h.dynamic,
-                         h.ever_dynamic, h.person});
+      // Back in the frame of the poses and the ground truth (the pipeline's is local).
+      tracks_.push_back({k, static_cast<std::int64_t>(h.id), h.reported_position + result.origin,
+                         h.dynamic, h.ever_dynamic, h.person});
     }
     times.segmentation.push_back(result.times.segmentation_ms);
     times.detection.push_back(result.times.detection_ms);
@@ -110,7 +111,12 @@ BenchmarkCase run_case(const sim::Scenario& scenario, const core::SensorModel& m
   out.name = scenario.name;
   out.moving = scenario.sensor.motion != sim::SensorMotion::kStatic;
   out.scans = scans;
-  pipeline::Pipeline pipeline(config, model);
+  // The simulator knows how high its sensor stands above the ground, and the pipeline is told, as
+  // users tell it of theirs: the altitude test then counts from the scenario's ground.
+  core::Config effective = config;
+  effective.detection.sensor_height_m =
+      sim::sensor_pose(scenario.sensor, 0).translation.z() - scenario.ground.height_m;
+  pipeline::Pipeline pipeline(effective, model);
   CaseRecorder recorder;
   sim::SimulatedScan scan;
   core::Pose pose;

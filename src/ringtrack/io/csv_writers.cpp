@@ -20,10 +20,10 @@ void append_vector(std::string& out, const Eigen::Vector3d& v) {
   for (int k = 0; k < 3; ++k) append_number(out, v[k]);
 }
 
-void append_box(std::string& out, const core::Box3& box) {
+void append_box(std::string& out, const core::Box3d& box) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (int k = 0; k < 3; ++k) append_number(out, box.empty() ? nan : double{box.min[k]});
-  for (int k = 0; k < 3; ++k) append_number(out, box.empty() ? nan : double{box.max[k]});
+  for (int k = 0; k < 3; ++k) append_number(out, box.empty() ? nan : box.min[k]);
+  for (int k = 0; k < 3; ++k) append_number(out, box.empty() ? nan : box.max[k]);
 }
 
 bool valid_stage_name(const std::string& name) {

@@ -23,14 +23,14 @@ inline constexpr std::string_view kObjectsCsvHeader =
     "scan,stamp,id,class,points,x,y,z,min_x,min_y,min_z,max_x,max_y,max_z,true_x,true_y,true_z,"
     "moving";
 
-/// One hypothesis in one scan, world frame: a row of tracks.csv.
+/// One hypothesis in one scan, world frame (the poses', in double): a row of tracks.csv.
 struct TrackRow {
   std::uint64_t scan{0};                              ///< scan index, from 0
   std::int64_t stamp_ns{0};                           ///< scan stamp
   std::uint64_t id{0};                                ///< hypothesis id, stable over time
   Eigen::Vector3d position{Eigen::Vector3d::Zero()};  ///< filter position, m
   Eigen::Vector3d velocity{Eigen::Vector3d::Zero()};  ///< filter velocity, m/s
-  core::Box3 box;                                     ///< current box, m (empty: nan)
+  core::Box3d box;                                    ///< current box, m (empty: nan)
   bool dynamic{false};                                ///< dynamic in this scan
   bool ever_dynamic{false};                           ///< dynamic in this or any earlier scan
   std::uint32_t age{0};                               ///< scans since the hypothesis started
@@ -46,7 +46,7 @@ struct ObjectRow {
   std::string class_name{"person"};                      ///< person, robot, drone, ...
   std::uint32_t points{0};                               ///< hit points in this scan
   Eigen::Vector3d centroid{Eigen::Vector3d::Zero()};     ///< centroid of the hit points, m
-  core::Box3 box;                                        ///< box of the hit points (empty: nan)
+  core::Box3d box;                                       ///< box of the hit points (empty: nan)
   Eigen::Vector3d true_center{Eigen::Vector3d::Zero()};  ///< true body centre, m
   bool moving{false};                                    ///< the object moves at this time
 };

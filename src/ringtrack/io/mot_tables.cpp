@@ -136,7 +136,7 @@ class Table {
                           : Eigen::Vector3d(number(cx), number(cy), number(cz));
   }
   // The six box columns: all nan = empty box, otherwise finite with min <= max.
-  [[nodiscard]] core::Box3 box() const {
+  [[nodiscard]] core::Box3d box() const {
     const Eigen::Vector3d lo = vector("min_x", "min_y", "min_z", false);
     const Eigen::Vector3d hi = vector("max_x", "max_y", "max_z", false);
     if (lo.array().isNaN().all() && hi.array().isNaN().all()) return {};
@@ -145,7 +145,7 @@ class Table {
                              ": columns min_x..max_z: expected a box with finite min <= max, or "
                              "nan in all six for no box");
     }
-    return {lo.cast<float>(), hi.cast<float>()};
+    return {lo, hi};
   }
 
  private:

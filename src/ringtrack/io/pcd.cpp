@@ -788,7 +788,11 @@ std::string encode_pcd(const core::OrganizedScan& scan, std::span<const std::uin
 }
 
 std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
-                              std::span<const float> intensities, PcdEncoding encoding) {
+                              std::span<const float> intensities, PcdEncoding encoding,
+                              std::string_view comment) {
+  if (comment.find_first_of("\r\n") != std::string_view::npos) {
+    throw core::Error("encode_pcd_points: a header comment must be one line");
+  }
   if (!intensities.empty() && intensities.size() != points.size()) {
     throw core::Error("encode_pcd_points: " + std::to_string(intensities.size()) +
                       " intensities for " + std::to_string(points.size()) + " points");
@@ -801,12 +805,20 @@ std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
     zs[i] = points[i].z();
     if (!intensities.empty()) is[i] = intensities[i];
   }
-  return encode_fields({xs, ys, zs, is, {}, n, 1}, encoding);
+  std::string out = encode_fields({xs, ys, zs, is, {}, n, 1}, encoding);
+  if (!comment.empty()) {
+    std::string line = "# ";
+    line += comment;
+    line += '\n';
+    out.insert(out.find('\n') + 1, line);
+  }
+  return out;
 }
 
 void write_pcd_points(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
-                      std::span<const float> intensities, PcdEncoding encoding) {
-  write_file(path, encode_pcd_points(points, intensities, encoding));
+                      std::span<const float> intensities, PcdEncoding encoding,
+                      std::string_view comment) {
+  write_file(path, encode_pcd_points(points, intensities, encoding, comment));
 }
 
 void write_pcd(const std::filesystem::path& path, const core::OrganizedScan& scan,

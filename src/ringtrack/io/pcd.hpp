@@ -100,14 +100,17 @@ void write_pcd(const std::filesystem::path& path, const core::OrganizedScan& sca
                PcdEncoding encoding = PcdEncoding::kBinaryCompressed);
 
 /// Encodes an unorganized cloud (WIDTH = points, HEIGHT 1) with fields x y z intensity (F4), e.g.
-/// the static map; intensities empty (all 0) or one per point, else core::Error.
+/// the static map; intensities empty (all 0) or one per point, else core::Error. A non-empty
+/// comment (one line, e.g. the frame's origin) becomes a "# " line after the first.
 std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
-                              std::span<const float> intensities, PcdEncoding encoding);
+                              std::span<const float> intensities, PcdEncoding encoding,
+                              std::string_view comment = {});
 /// Writes encode_pcd_points' bytes to a file; I/O failures throw core::Error and remove the
 /// partial file.
 void write_pcd_points(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
                       std::span<const float> intensities,
-                      PcdEncoding encoding = PcdEncoding::kBinaryCompressed);
+                      PcdEncoding encoding = PcdEncoding::kBinaryCompressed,
+                      std::string_view comment = {});
 
 /// Sets each column's azimuth to the circular mean azimuth of its valid points; columns without
 /// points are interpolated from their neighbours (uniform 2*pi/columns steps when none has points).

@@ -23,7 +23,10 @@ void append_le(std::string& out, float value) {
 }  // namespace
 
 std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const float> intensities,
-                       PlyEncoding encoding) {
+                       PlyEncoding encoding, std::string_view comment) {
+  if (comment.find_first_of("\r\n") != std::string_view::npos) {
+    throw core::Error("encode_ply: a header comment must be one line");
+  }
   if (!intensities.empty() && intensities.size() != points.size()) {
     throw core::Error("encode_ply: " + std::to_string(intensities.size()) + " intensities for " +
                       std::to_string(points.size()) + " points");
@@ -31,7 +34,13 @@ std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const 
   const bool binary = encoding == PlyEncoding::kBinaryLittleEndian;
   std::string out = "ply\n";
   out += binary ? "format binary_little_endian 1.0\n" : "format ascii 1.0\n";
-  out += "comment ringtrack\nelement vertex " + std::to_string(points.size()) +
+  out += "comment ringtrack\n";
+  if (!comment.empty()) {
+    out += "comment ";
+    out += comment;
+    out += '\n';
+  }
+  out += "element vertex " + std::to_string(points.size()) +
          "\nproperty float x\nproperty float y\nproperty float z\nproperty float intensity\n"
          "end_header\n";
   out.reserve(out.size() + points.size() * (binary ? 16 : 48));
@@ -57,8 +66,9 @@ std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const 
 }
 
 void write_ply(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
-               std::span<const float> intensities, PlyEncoding encoding) {
-  write_file(path, encode_ply(points, intensities, encoding));
+               std::span<const float> intensities, PlyEncoding encoding,
+               std::string_view comment) {
+  write_file(path, encode_ply(points, intensities, encoding, comment));
 }
 
 }  // namespace ringtrack::io

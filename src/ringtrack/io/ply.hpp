@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <span>
 #include <string>
+#include <string_view>
 
 namespace ringtrack::io {
 
@@ -16,12 +17,15 @@ enum class PlyEncoding {
 
 /// Encodes points as a PLY file with one vertex element of float properties x y z intensity.
 /// intensities must be empty (all 0) or hold one value per point; throws core::Error otherwise.
+/// A non-empty comment (one line, e.g. the frame's origin) becomes a header comment line.
 std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const float> intensities,
-                       PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian);
+                       PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian,
+                       std::string_view comment = {});
 
 /// Writes encode_ply's bytes to a file; I/O failures throw core::Error and remove the partial file.
 void write_ply(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
                std::span<const float> intensities,
-               PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian);
+               PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian,
+               std::string_view comment = {});
 
 }  // namespace ringtrack::io

@@ -1,6 +1,8 @@
 #include "ringtrack/pipeline/pipeline.hpp"
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <iomanip>
 #include <numbers>
 #include <sstream>
@@ -27,7 +29,55 @@ std::string older_than_previous(std::int64_t stamp_ns, std::int64_t previous_ns)
   return text.str();
 }
 
+// The farthest a pose may lie from the local origin: where float32 positions keep millimetres
+// and the static map's voxel index (+-2^20 voxels) still holds every point the sensor returns.
+double max_local_distance_m(const core::Config& config) {
+  const double map_half_extent_m = std::ldexp(config.mapping.voxel_size_m, 20);
+  return std::min(kMaxLocalDistanceM, map_half_extent_m - config.segmentation.invalid_range_m);
+}
+
+std::string format_m(double value) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(3) << value;
+  return text.str();
+}
+
+std::string format_xyz(const Eigen::Vector3d& p) {
+  std::ostringstream text;
+  text << std::fixed << std::setprecision(3) << '(' << p.x() << ", " << p.y() << ", " << p.z()
+       << ") m";
+  return text.str();
+}
+
 }  // namespace
+
+core::Pose Pipeline::to_local(const core::Pose& world) {
+  if (!world.translation.allFinite()) {
+    throw core::InputError("pipeline: the pose at " + std::to_string(world.stamp_ns) +
+                           " ns has a non-finite position " + format_xyz(world.translation));
+  }
+  if (!framed_) {
+    origin_ = (world.translation / kOriginGridM).array().round() * kOriginGridM;
+    // The ground the altitude test counts from: under the sensor where the run starts, so the
+    // test follows the data, not the datum of the world frame (sea level, a map's corner).
+    ground_z_ = world.translation.z() - origin_.z() - config_.detection.sensor_height_m;
+    detector_.set_ground_z(ground_z_);
+    framed_ = true;
+  }
+  core::Pose local = world;
+  local.translation -= origin_;
+  const double reach_m = max_local_distance_m(config_);
+  if (local.translation.norm() > reach_m) {
+    throw core::InputError("pipeline: the pose at " + std::to_string(world.stamp_ns) + " ns, " +
+                           format_xyz(world.translation) + ", lies " +
+                           format_m(local.translation.norm()) + " m from the run's local origin " +
+                           format_xyz(origin_) + " (the first pose rounded to " +
+                           format_m(kOriginGridM) + " m); positions are kept in float relative "
+                           "to it, which allows at most " + format_m(reach_m) +
+                           " m (docs/inputs.md, \"Frames\"): split the run");
+  }
+  return local;
+}
 
 const FrameResult& Pipeline::skip(const core::OrganizedScan& scan, std::string reason) {
   ++skipped_scans_;
@@ -35,6 +85,7 @@ const FrameResult& Pipeline::skip(const core::OrganizedScan& scan, std::string r
   result_.stamp_ns = scan.stamp_ns;
   result_.skipped = true;
   result_.skip_reason = std::move(reason);
+  result_.origin = origin_;
   return result_;
 }
 
@@ -52,7 +103,8 @@ Pipeline::Pipeline(const core::Config& config, core::SensorModel model)
   model_.validate();
 }
 
-const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core::Pose& pose) {
+const FrameResult& Pipeline::process(const core::OrganizedScan& scan,
+                                     const core::Pose& world_pose) {
   if (tracker_.stamp_ns() != 0 && scan.stamp_ns < tracker_.stamp_ns()) {
     return skip(scan, older_than_previous(scan.stamp_ns, tracker_.stamp_ns()));
   }
@@ -66,6 +118,8 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
                            std::to_string(scan.rings()) + " rings, the sensor model " +
                            model_.name + " has " + std::to_string(model_.rings()));
   }
+  // Every stage works in the local frame (class comment): float positions near zero.
+  const core::Pose pose = to_local(world_pose);
   const auto t0 = Clock::now();
   segmenter_.segment(scan, labels_);
   const auto t1 = Clock::now();
@@ -99,8 +153,9 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan, const core
   result_.retroactive_points = filtered.retroactive_points;
   result_.times = {elapsed_ms(t0, t1), elapsed_ms(t1, t2), elapsed_ms(t2, t3), elapsed_ms(t3, t4),
                    elapsed_ms(t0, t4)};
-  result_.pose = pose;
-  previous_pose_ = pose;
+  result_.pose = world_pose;
+  result_.origin = origin_;
+  previous_pose_ = pose;  // local, as the motion of the next scan is taken in the local frame
   return result_;
 }
 
@@ -159,11 +214,14 @@ const FrameResult& Pipeline::process_with_odometry(core::OrganizedScan& scan) {
                     " ns repeats the previous scan's: the odometry needs time to pass; skipped");
   }
   if (!odometry_) {
-    odometry_ = std::make_unique<odometry::Odometry>(config_.odometry, odometry_start_.isometry());
+    // Its map is float too: it starts from the start pose in the local frame.
+    odometry_ = std::make_unique<odometry::Odometry>(config_.odometry,
+                                                     to_local(odometry_start_).isometry());
   }
   const auto t0 = Clock::now();
   predicted_track_boxes(scan.stamp_ns);
   odometry_result_ = odometry_->process(scan, excluded_boxes_);
+  odometry_result_.pose.translation += origin_;  // callers (and process()) take world poses
   const double odometry_ms = elapsed_ms(t0, Clock::now());
   process(scan, odometry_result_.pose);
   result_.times.odometry_ms = odometry_ms;

@@ -1,6 +1,7 @@
 #pragma once
 /// The whole per-scan pipeline: segmentation, detection, tracking, dynamic-object filter.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -23,6 +24,13 @@
 
 namespace ringtrack::pipeline {
 
+/// The local frame's origin is the first pose's position rounded to this grid (m): a whole number
+/// that users can read off the outputs, near zero for worlds near their origin (those run exactly
+/// as in the world frame), and a multiple of every usual voxel size (voxels stay world-aligned).
+inline constexpr double kOriginGridM = 100.0;
+/// Farthest a sensor may go from the local origin (m): float32 positions keep 4 mm there.
+inline constexpr double kMaxLocalDistanceM = 50'000.0;
+
 /// Wall time of each stage for one scan, in milliseconds.
 struct StageTimes {
   double segmentation_ms{0};
@@ -34,16 +42,18 @@ struct StageTimes {
 };
 
 /// What one scan produced. The spans point into the pipeline's buffers and stay valid until the
-/// next call to process() or finish().
+/// next call to process() or finish(). Positions are in the pipeline's local frame: add origin
+/// (in double) for the world frame of the poses (Pipeline::origin()).
 struct FrameResult {
   std::int64_t stamp_ns{0};
   std::span<const std::uint8_t> segment_labels;      ///< per cell: 1 segment point, 0 not
-  std::span<const core::Detection> detections;       ///< world frame
-  std::span<const tracking::Hypothesis> hypotheses;  ///< after this scan's update
+  std::span<const core::Detection> detections;       ///< local frame
+  std::span<const tracking::Hypothesis> hypotheses;  ///< after this scan's update, local frame
   std::span<const std::uint32_t> removed_cells;      ///< cells removed as dynamic from this scan
   std::size_t retroactive_points{0};                 ///< removed from earlier scans in the log
   StageTimes times;
-  core::Pose pose;  ///< the sensor pose the scan was processed with (given or estimated)
+  core::Pose pose;  ///< the sensor pose the scan was processed with (given or estimated), world
+  Eigen::Vector3d origin{Eigen::Vector3d::Zero()};  ///< the local frame's origin in the world
   /// The scan was not processed (its stamp is not after the previous scan's: a host clock step,
   /// a corrupt stamp or a repeated scan); the spans are empty and skip_reason says why.
   bool skipped{false};
@@ -52,16 +62,26 @@ struct FrameResult {
 };
 
 /// Runs the stages in order on each scan; one instance per sensor stream.
+///
+/// Frames (docs/inputs.md, "Frames"): poses come in the user's world frame, which may be
+/// UTM-scale (GNSS, georeferenced maps) or far above sea level. The stages keep positions in
+/// float, so the pipeline works in a local frame, the world shifted by origin(): the first pose's
+/// position rounded to kOriginGridM, subtracted from every pose in double before anything
+/// becomes float. Detections, hypotheses and the static map are in that frame; writers add the
+/// origin back. Heights are relative: detection.max_altitude_m counts from the ground, taken as
+/// detection.sensor_height_m below the first scan's sensor.
 class Pipeline {
  public:
   /// The model is the sensor's that took the scans: the free-space tests follow its beams.
   Pipeline(const core::Config& config, core::SensorModel model);
 
-  /// Processes one scan taken at `pose` (sensor in world). A scan whose stamp is not after the
-  /// previous processed one's is skipped, not processed (the tracker's filters cannot run
+  /// Processes one scan taken at `world_pose` (sensor in world). A scan whose stamp is not after
+  /// the previous processed one's is skipped, not processed (the tracker's filters cannot run
   /// backwards, and a repeated scan would count as a second observation): the result says so
-  /// and why, and skipped_scans() counts it; later scans continue the tracks.
-  const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& pose);
+  /// and why, and skipped_scans() counts it; later scans continue the tracks. Throws
+  /// core::InputError for a pose with a non-finite position or farther than the local frame
+  /// allows from origin() (kMaxLocalDistanceM, less for voxels under 5 cm).
+  const FrameResult& process(const core::OrganizedScan& scan, const core::Pose& world_pose);
   /// Processes a scan of a sensor without a pose source: the odometry (config.odometry) estimates
   /// its pose and motion-compensates the scan in place, leaving out the points of the objects
   /// tracked so far (predicted to this scan), and the scan is then processed with that pose.
@@ -74,6 +94,13 @@ class Pipeline {
   [[nodiscard]] const odometry::OdometryResult& odometry_result() const { return odometry_result_; }
   /// The odometry (nullptr before the first process_with_odometry()).
   [[nodiscard]] const odometry::Odometry* odometry() const { return odometry_.get(); }
+  /// Where the local frame's origin lies in the world frame (zero before the first scan): world =
+  /// local + origin. Everything the pipeline keeps (hypotheses, map, filter log) is local.
+  [[nodiscard]] const Eigen::Vector3d& origin() const { return origin_; }
+  /// Local z of the ground max_altitude_m counts from (first sensor z - sensor_height_m).
+  [[nodiscard]] double ground_z() const { return ground_z_; }
+  /// The detector's counters of the last processed scan (e.g. clusters above max_altitude_m).
+  [[nodiscard]] const detection::DetectorStats& detector_stats() const { return detector_.stats(); }
   /// Scans skipped so far because their stamp was not after the previous scan's.
   [[nodiscard]] std::uint64_t skipped_scans() const { return skipped_scans_; }
   /// Moves the scans still held back by the dynamic-object filter into the static map.
@@ -92,6 +119,9 @@ class Pipeline {
  private:
   /// Counts a skipped scan and makes the result say why.
   const FrameResult& skip(const core::OrganizedScan& scan, std::string reason);
+  /// Fixes the local frame at the first pose (origin, ground height); the pose in it afterwards.
+  /// Throws core::InputError for a pose too far from the origin for float positions.
+  core::Pose to_local(const core::Pose& world);
   /// Forgets the background when the sensor left its resting pose; true while it rests there.
   bool track_rest(const core::Pose& pose);
   /// World boxes of the reported tracks predicted to stamp_ns and grown by the exclusion margin.
@@ -123,6 +153,9 @@ class Pipeline {
   odometry::OdometryResult odometry_result_;
   core::Pose odometry_start_;
   std::vector<core::Box3> excluded_boxes_;
+  bool framed_{false};  // origin_ and ground_z_ are fixed (at the first scan)
+  Eigen::Vector3d origin_{Eigen::Vector3d::Zero()};
+  double ground_z_{0.0};
 };
 
 }  // namespace ringtrack::pipeline

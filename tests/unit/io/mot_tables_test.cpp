@@ -59,7 +59,7 @@ TEST(ObjectsCsv, ReadsRowsIncludingOnesWithoutPoints) {
   EXPECT_EQ(rows[0].class_name, "person");
   EXPECT_EQ(rows[0].points, 12u);
   EXPECT_EQ(rows[0].centroid, Eigen::Vector3d(1.5, -2.0, 0.9));
-  EXPECT_FLOAT_EQ(rows[0].box.max.z(), 1.8f);
+  EXPECT_DOUBLE_EQ(rows[0].box.max.z(), 1.8);  // read in double (UTM-scale boxes)
   EXPECT_TRUE(rows[0].moving);
   EXPECT_TRUE(std::isnan(rows[1].centroid.x()));
   EXPECT_TRUE(rows[1].box.empty());

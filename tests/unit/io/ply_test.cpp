@@ -6,6 +6,7 @@
 
 #include "io_test_util.hpp"
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/pcd.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -60,6 +61,26 @@ TEST(Ply, EmptyCloudAndErrors) {
   if (std::filesystem::exists("/dev/full")) {
     EXPECT_THROW(write_ply("/dev/full", kPoints, kIntensity), core::Error);
   }
+}
+
+// Issue 16: the maps stay in the pipeline's local frame (float32) and say where it lies, in a
+// header comment that PLY and PCD readers skip.
+TEST(Ply, CommentLineStatesTheFrameAndPcdReadersSkipIt) {
+  const std::string comment = "origin_m 500000.000 5000000.000 100.000 (world = point + origin)";
+  std::string header = kHeader;
+  header.insert(header.find("element"), "comment " + comment + "\n");
+  EXPECT_EQ(encode_ply(kPoints, kIntensity, PlyEncoding::kBinaryLittleEndian, comment)
+                .substr(0, header.size()),
+            header);
+  EXPECT_THROW(encode_ply(kPoints, kIntensity, PlyEncoding::kAscii, "two\nlines"), core::Error);
+
+  const std::string pcd = encode_pcd_points(kPoints, kIntensity, PcdEncoding::kAscii, comment);
+  EXPECT_EQ(pcd.substr(0, pcd.find("VERSION")),
+            "# .PCD v0.7 - Point Cloud Data file format\n# " + comment + "\n");
+  const auto cloud = decode_pcd_cloud(
+      std::span(reinterpret_cast<const std::uint8_t*>(pcd.data()), pcd.size()), "map.pcd");
+  ASSERT_EQ(cloud.size(), 2u);
+  EXPECT_EQ(cloud.xyz[1], kPoints[1]);
 }
 
 }  // namespace
