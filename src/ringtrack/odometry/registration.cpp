@@ -99,10 +99,11 @@ IcpResult register_points(const std::vector<Eigen::Vector3f>& sensor_points, con
     if (!step.allFinite()) break;
     result.world_T_sensor.linear() = rotation_from_vector(step.tail<3>()) * rotation;
     result.world_T_sensor.translation() = origin + step.head<3>();
+    // Converged; or nearly, and bouncing between two sets of nearest neighbours (the step
+    // reverses the previous one).
+    const bool bouncing = step.norm() < 10.0 * settings.convergence && step.dot(previous) < 0;
     previous = step;
-    // Converged; or nearly, and bouncing between two sets of nearest neighbours.
-    if (step.norm() < settings.convergence ||
-        (step.norm() < 10.0 * settings.convergence && step.dot(previous) < 0)) {
+    if (step.norm() < settings.convergence || bouncing) {
       result.converged = true;
       break;
     }
