@@ -52,8 +52,7 @@ Eigen::Matrix3d rotation_from_vector(const Eigen::Vector3d& w) {
 
 IcpResult register_points(const std::vector<Eigen::Vector3f>& sensor_points, const VoxelMap& map,
                           const Eigen::Isometry3d& initial, const IcpSettings& settings,
-                          const std::vector<Eigen::Vector3f>& normals,
-                          NeighbourCache* neighbours) {
+                          const std::vector<Eigen::Vector3f>& normals, NeighbourCache* neighbours) {
   const bool plane = settings.point_to_plane && normals.size() == sensor_points.size();
   IcpResult result;
   result.world_T_sensor = initial;

@@ -100,7 +100,8 @@ int VoxelMap::candidates(const Eigen::Vector3f& p, double max_distance_m,
 VoxelKey VoxelMap::block_key(const Eigen::Vector3f& p, double max_distance_m) const {
   const Eigen::Vector3f q = p * inv_voxel_size_;
   const float shift = max_distance_m <= 0.5 * voxel_size_m_ ? 0.5F : 0.0F;
-  return pack_voxel(floor_to_int(q.x() - shift), floor_to_int(q.y() - shift), floor_to_int(q.z() - shift));
+  return pack_voxel(floor_to_int(q.x() - shift), floor_to_int(q.y() - shift),
+                    floor_to_int(q.z() - shift));
 }
 
 bool VoxelMap::nearest(const Eigen::Vector3f& p, double max_distance_m,
