@@ -243,7 +243,11 @@ bool Odometry::register_scan(const Eigen::Isometry3d& predicted, int max_iterati
   settings.max_iterations = max_iterations;
   settings.convergence = config_.convergence_m;
   settings.point_to_plane = config_.residual == core::OdometryResidual::kPointToPlane;
-  const IcpResult icp = register_points(source_, map_, predicted, settings, source_normals_);
+  if (!neighbours_ || neighbours_->max_distance_m() != settings.max_distance_m) {
+    neighbours_.emplace(map_, settings.max_distance_m, source_.size());
+  }
+  const IcpResult icp =
+      register_points(source_, map_, predicted, settings, source_normals_, &*neighbours_);
   result.iterations += icp.iterations;
   result.correspondences = icp.correspondences;
   result.threshold_m = settings.max_distance_m;
@@ -306,6 +310,7 @@ void Odometry::restart_map(const Eigen::Isometry3d& first_motion, double dt_s) {
   // from it compensated with the motion now known, so that the second pass, and every scan after,
   // registers against a consistent start (else its skew stays in the map as a tilt).
   map_.clear();
+  neighbours_.reset();
   const Eigen::AngleAxisd aa(first_motion.linear());
   const Eigen::Vector3f w = (aa.angle() * aa.axis() / dt_s).cast<float>();
   const Eigen::Vector3f v = (first_motion.translation() / dt_s).cast<float>();
@@ -330,6 +335,7 @@ OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core
       scans_ == 0 ? 0.0 : 1e-9 * static_cast<double>(scan.stamp_ns - last_stamp_ns_);
   const Eigen::Isometry3d predicted = scans_ == 0 ? start_ : predict(dt_s);
   applied_ = Eigen::Isometry3d::Identity();
+  neighbours_.reset();  // new points, and the map changed since
   if (config_.deskew && motion_dt_s_ > 0) {
     deskew_constant_velocity(scan, motion_, motion_dt_s_);
     applied_ = scale_motion(motion_, dt_s / motion_dt_s_);

@@ -3,6 +3,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -109,6 +110,9 @@ class Odometry {
   Eigen::Isometry3d pending_used_{Eigen::Isometry3d::Identity()};  // compensated with this ...
   double pending_used_dt_s_{0.0};                                   // ... motion over this time
   std::vector<std::uint32_t> source_cells_;
+  // Neighbours of the source points, shared by one scan's passes (the map does not change
+  // between them, the points move by millimetres); dropped when the map does.
+  std::optional<NeighbourCache> neighbours_;
   std::vector<Eigen::Vector3f> source_normals_, valid_normals_;
   Eigen::Isometry3d last_pose_{Eigen::Isometry3d::Identity()};
   Eigen::Isometry3d motion_{Eigen::Isometry3d::Identity()};  // last scan-to-scan motion

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <utility>
 
 namespace ringtrack::odometry {
@@ -13,41 +14,6 @@ namespace {
 
 using Matrix6d = Eigen::Matrix<double, 6, 6>;
 using Vector6d = Eigen::Matrix<double, 6, 1>;
-
-// Candidate voxels of each source point, looked up again only when the point's search block
-// changes: after the first iterations the pose moves by millimetres and the hash is not touched.
-struct CandidateCache {
-  std::vector<VoxelKey> block;
-  std::vector<std::array<const VoxelMap::Voxel*, 27>> voxels;
-  std::vector<int> count;
-
-  explicit CandidateCache(std::size_t n) : block(n, ~VoxelKey{0}), voxels(n), count(n, 0) {}
-};
-
-// Nearest map point among the cached candidate voxels of point i; false when none is close enough.
-bool nearest_cached(const VoxelMap& map, CandidateCache& cache, std::size_t i,
-                    const Eigen::Vector3f& q, double max_distance_m, Eigen::Vector3f& out) {
-  const VoxelKey key = map.block_key(q, max_distance_m);
-  if (key != cache.block[i]) {
-    cache.block[i] = key;
-    cache.count[i] = map.candidates(q, max_distance_m, cache.voxels[i]);
-  }
-  float best = static_cast<float>(max_distance_m * max_distance_m);
-  bool found = false;
-  for (int k = 0; k < cache.count[i]; ++k) {
-    const VoxelMap::Voxel& voxel = *cache.voxels[i][static_cast<std::size_t>(k)];
-    if (map.cube_distance2(voxel, q) > best) continue;
-    for (const auto& m : voxel.points) {
-      const float d2 = (m - q).squaredNorm();
-      if (d2 <= best) {
-        best = d2;
-        out = m;
-        found = true;
-      }
-    }
-  }
-  return found;
-}
 
 // Adds one weighted correspondence to the normal equations. The rotation's lever arm is taken from
 // the sensor position (not the world origin) so that the system stays well conditioned far away.
@@ -86,11 +52,15 @@ Eigen::Matrix3d rotation_from_vector(const Eigen::Vector3d& w) {
 
 IcpResult register_points(const std::vector<Eigen::Vector3f>& sensor_points, const VoxelMap& map,
                           const Eigen::Isometry3d& initial, const IcpSettings& settings,
-                          const std::vector<Eigen::Vector3f>& normals) {
+                          const std::vector<Eigen::Vector3f>& normals, NeighbourCache* neighbours) {
   const bool plane = settings.point_to_plane && normals.size() == sensor_points.size();
   IcpResult result;
   result.world_T_sensor = initial;
-  CandidateCache cache(sensor_points.size());
+  std::optional<NeighbourCache> own;
+  if (neighbours == nullptr || neighbours->size() != sensor_points.size() ||
+      neighbours->max_distance_m() != settings.max_distance_m) {
+    neighbours = &own.emplace(map, settings.max_distance_m, sensor_points.size());
+  }
   Eigen::Vector3f nearest = Eigen::Vector3f::Zero();
   Vector6d previous = Vector6d::Zero();
   for (int it = 0; it < settings.max_iterations; ++it) {
@@ -103,9 +73,7 @@ IcpResult register_points(const std::vector<Eigen::Vector3f>& sensor_points, con
       if (plane && normals[i].isZero()) continue;
       const Eigen::Vector3d lever = rotation * sensor_points[i].cast<double>();
       const Eigen::Vector3d q = lever + origin;
-      if (!nearest_cached(map, cache, i, q.cast<float>(), settings.max_distance_m, nearest)) {
-        continue;
-      }
+      if (!neighbours->nearest(i, q.cast<float>(), nearest)) continue;
       const Eigen::Vector3d residual = q - nearest.cast<double>();
       if (plane) {
         const Eigen::Vector3d n = rotation * normals[i].cast<double>();
@@ -130,10 +98,11 @@ IcpResult register_points(const std::vector<Eigen::Vector3f>& sensor_points, con
     if (!step.allFinite()) break;
     result.world_T_sensor.linear() = rotation_from_vector(step.tail<3>()) * rotation;
     result.world_T_sensor.translation() = origin + step.head<3>();
+    // Converged; or nearly, and bouncing between two sets of nearest neighbours (the step
+    // reverses the previous one).
+    const bool bouncing = step.norm() < 10.0 * settings.convergence && step.dot(previous) < 0;
     previous = step;
-    // Converged; or nearly, and bouncing between two sets of nearest neighbours.
-    if (step.norm() < settings.convergence ||
-        (step.norm() < 10.0 * settings.convergence && step.dot(previous) < 0)) {
+    if (step.norm() < settings.convergence || bouncing) {
       result.converged = true;
       break;
     }

@@ -35,11 +35,14 @@ struct IcpResult {
 /// Aligns sensor-frame points to the map, starting from initial (world_T_sensor), by Gauss-Newton
 /// on the robustly weighted distances to each point's nearest map point: the whole distance, or
 /// (settings.point_to_plane) its component along the point's unit normal in `normals` (sensor
-/// frame, same order; a zero normal leaves the point out).
+/// frame, same order; a zero normal leaves the point out). `neighbours`, when given, is reused
+/// (it must be for this map, the settings' distance and one slot per point; else a fresh one is
+/// used): registrations of the same points against the same map in a row search less.
 [[nodiscard]] IcpResult register_points(const std::vector<Eigen::Vector3f>& sensor_points,
                                         const VoxelMap& map, const Eigen::Isometry3d& initial,
                                         const IcpSettings& settings,
-                                        const std::vector<Eigen::Vector3f>& normals = {});
+                                        const std::vector<Eigen::Vector3f>& normals = {},
+                                        NeighbourCache* neighbours = nullptr);
 
 /// Smallest eigenvalue of the mean of n n^T over unit normals: the share of the surface
 /// orientations that constrains the weakest translation direction (0 on a plane, 1/3 at most).

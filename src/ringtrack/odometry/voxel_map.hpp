@@ -13,10 +13,28 @@ namespace ringtrack::odometry {
 /// Integer voxel coordinates packed into 63 bits (21 bits per axis, +-2^20 voxels).
 using VoxelKey = std::uint64_t;
 
+/// floor(v) as an int for finite |v| < 2^31; without SSE4.1 std::floor is a libm call, and the
+/// downsampling takes three per point.
+[[nodiscard]] inline int floor_to_int(float v) {
+  const int i = static_cast<int>(v);  // truncates towards zero
+  return i - static_cast<int>(v < static_cast<float>(i));
+}
+/// Key of integer voxel coordinates. Coordinates beyond +-2^20 voxels wrap: points that far
+/// apart never meet in one scan's search. Inline: downsampling and the search call it per point.
+[[nodiscard]] inline VoxelKey pack_voxel(int x, int y, int z) {
+  constexpr int kAxisBits = 21;
+  constexpr int kAxisOffset = 1 << (kAxisBits - 1);
+  constexpr VoxelKey kAxisMask = (VoxelKey{1} << kAxisBits) - 1;
+  const auto ux = static_cast<VoxelKey>(x + kAxisOffset) & kAxisMask;
+  const auto uy = static_cast<VoxelKey>(y + kAxisOffset) & kAxisMask;
+  const auto uz = static_cast<VoxelKey>(z + kAxisOffset) & kAxisMask;
+  return ux | (uy << kAxisBits) | (uz << (2 * kAxisBits));
+}
 /// Key of the voxel of edge voxel_size_m holding p.
-[[nodiscard]] VoxelKey voxel_key(const Eigen::Vector3f& p, float inv_voxel_size);
-/// Key of integer voxel coordinates.
-[[nodiscard]] VoxelKey pack_voxel(int x, int y, int z);
+[[nodiscard]] inline VoxelKey voxel_key(const Eigen::Vector3f& p, float inv_voxel_size) {
+  return pack_voxel(floor_to_int(p.x() * inv_voxel_size), floor_to_int(p.y() * inv_voxel_size),
+                    floor_to_int(p.z() * inv_voxel_size));
+}
 
 /// Open-addressing set of voxel keys, reused across scans without reallocating (clear() keeps the
 /// table): the voxel downsampling of a scan costs tens of nanoseconds per point.
@@ -95,6 +113,42 @@ class VoxelMap {
   Eigen::Vector3f edge_;
   std::size_t max_points_;
   std::unordered_map<VoxelKey, Voxel, KeyHash> voxels_;
+};
+
+/// Nearest map points of a fixed list of query points that move a little between calls (the
+/// source points of one ICP run), against a map that does not change meanwhile. Answers exactly
+/// as VoxelMap::nearest (up to ties), but searches only when needed: each slot remembers where it
+/// last searched, its answer and the gap to the runner-up; while the query has moved less than
+/// half that gap (and its candidate block is the same), the answer stands (triangle inequality).
+class NeighbourCache {
+ public:
+  /// For `points` query slots, neighbours within max_distance_m (<= one voxel).
+  NeighbourCache(const VoxelMap& map, double max_distance_m, std::size_t points);
+  /// Nearest map point to q within the distance, for query slot i; false when none.
+  bool nearest(std::size_t i, const Eigen::Vector3f& q, Eigen::Vector3f& out);
+  /// The distance it answers for, and its number of query slots.
+  [[nodiscard]] double max_distance_m() const { return max_distance_m_; }
+  [[nodiscard]] std::size_t size() const { return slots_.size(); }
+  /// Searches run so far (tests: they must be rarer than queries).
+  [[nodiscard]] std::size_t searches() const { return searches_; }
+
+ private:
+  struct Slot {
+    VoxelKey block{~VoxelKey{0}};
+    int count{0};  // candidate voxels
+    bool found{false};
+    float slack2{-1.0F};  // squared distance q may move from anchor with the same answer
+    Eigen::Vector3f anchor{Eigen::Vector3f::Zero()};   // where the last search ran
+    Eigen::Vector3f nearest{Eigen::Vector3f::Zero()};  // what it found (when found)
+    std::array<const VoxelMap::Voxel*, 27> voxels{};
+  };
+  void search(Slot& slot, const Eigen::Vector3f& q);
+
+  const VoxelMap* map_;
+  double max_distance_m_;
+  float max2_, reach_;
+  std::vector<Slot> slots_;
+  std::size_t searches_{0};
 };
 
 }  // namespace ringtrack::odometry

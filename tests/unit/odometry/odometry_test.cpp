@@ -88,6 +88,69 @@ TEST(VoxelMap, NearestMatchesBruteForceWithinHalfAVoxel) {
   }
 }
 
+// Brute-force reference: the nearest of all map points within radius (none: false).
+bool brute_nearest(const std::vector<Eigen::Vector3f>& points, const Eigen::Vector3f& q,
+                   double radius, float& distance) {
+  distance = std::numeric_limits<float>::infinity();
+  for (const auto& p : points) distance = std::min(distance, (p - q).norm());
+  return distance <= radius;
+}
+
+// Queries that wander by steps from 0.1 mm to 20 cm, as ICP's points do: every answer of the
+// cache must be the brute-force nearest, and most must come without a search.
+TEST(NeighbourCache, MatchesBruteForceWhileQueriesMove) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(-4.0F, 4.0F);
+  std::vector<Eigen::Vector3f> points(4000);
+  for (auto& p : points) p = {u(rng), u(rng), u(rng)};
+  odometry::VoxelMap map(1.0, 1000);
+  map.insert(points);
+  for (double radius : {0.3, 0.5}) {
+    constexpr std::size_t kSlots = 150;
+    odometry::NeighbourCache cache(map, radius, kSlots);
+    std::vector<Eigen::Vector3f> queries(kSlots);
+    for (auto& q : queries) q = {u(rng), u(rng), u(rng)};
+    std::size_t asked = 0;
+    for (int it = 0; it < 40; ++it) {
+      const float step = it < 5 ? 0.2F : (it < 20 ? 0.005F : 1e-4F);
+      std::normal_distribution<float> n(0.0F, step);
+      for (std::size_t i = 0; i < kSlots; ++i) {
+        queries[i] += Eigen::Vector3f(n(rng), n(rng), n(rng));
+        float best = 0;
+        const bool expected = brute_nearest(points, queries[i], radius, best);
+        Eigen::Vector3f found;
+        const bool ok = cache.nearest(i, queries[i], found);
+        ++asked;
+        ASSERT_EQ(ok, expected) << "radius " << radius << " iteration " << it << " slot " << i;
+        if (ok) {
+          ASSERT_FLOAT_EQ((found - queries[i]).norm(), best) << "iteration " << it;
+        }
+      }
+    }
+    EXPECT_LT(cache.searches(), asked / 2) << "radius " << radius;
+  }
+}
+
+// Two map points 0.2 m apart on x: a query walking from one to the other must switch exactly at
+// the bisector, and lose its neighbour beyond the distance.
+TEST(NeighbourCache, SwitchesAtTheBisectorAndDropsBeyondTheDistance) {
+  odometry::VoxelMap map(1.0, 20);
+  map.insert({{0.4F, 0.5F, 0.5F}, {0.6F, 0.5F, 0.5F}});
+  odometry::NeighbourCache cache(map, 0.3, 1);
+  Eigen::Vector3f found;
+  for (int k = 0; k <= 40; ++k) {
+    const float x = 0.30F + 0.01F * static_cast<float>(k);  // 0.30 .. 0.70
+    if (std::abs(x - 0.5F) < 1e-4F) continue;               // the tie itself
+    ASSERT_TRUE(cache.nearest(0, {x, 0.5F, 0.5F}, found)) << x;
+    EXPECT_FLOAT_EQ(found.x(), x < 0.5F ? 0.4F : 0.6F) << x;
+  }
+  EXPECT_TRUE(cache.nearest(0, {0.6F, 0.5F, 0.79F}, found));   // 0.29 m above the second
+  EXPECT_FALSE(cache.nearest(0, {0.6F, 0.5F, 0.81F}, found));  // 0.31 m: beyond
+  EXPECT_FALSE(cache.nearest(0, {0.6F, 0.5F, 0.95F}, found));
+  EXPECT_TRUE(cache.nearest(0, {0.6F, 0.5F, 0.6F}, found));    // back within
+  EXPECT_FLOAT_EQ(found.z(), 0.5F);
+}
+
 TEST(VoxelMap, KeepsAtMostMaxPointsPerVoxelAndCropsFarVoxels) {
   odometry::VoxelMap map(1.0, 3);
   std::vector<Eigen::Vector3f> points;
