@@ -352,7 +352,8 @@ std::optional<VisibilityQuery::Located> VisibilityQuery::locate(
   const double column_s = sweep_s_ / static_cast<double>(std::max(1, columns_ - 1));
   for (int step = 0; step < 4 && loc; ++step) {
     const Frame f = column_frame(loc->column);
-    const auto next = locate_sensor_point(f.world_R_sensor.transpose() * (world_point - f.world_t_sensor));
+    const auto next =
+        locate_sensor_point(f.world_R_sensor.transpose() * (world_point - f.world_t_sensor));
     if (!next) return next;
     const double apart_s =
         1e-9 * std::abs(static_cast<double>(stamps[static_cast<std::size_t>(next->column)] -
@@ -407,8 +408,8 @@ PointProbe VisibilityQuery::probe(const Eigen::Vector3d& world_point, double mar
           returned ? scan_->range_m(i) - loc->distance_m : 0.0};
 }
 
-bool VisibilityQuery::sees_through(const Eigen::Vector3d& point, double margin_m,
-                                   double lateral_m, double clearance_m) const {
+bool VisibilityQuery::sees_through(const Eigen::Vector3d& point, double margin_m, double lateral_m,
+                                   double clearance_m) const {
   const PointProbe p = probe(point, margin_m);
   if (p.visibility != Visibility::kFree || p.lateral_m > lateral_m) return false;
   // A descending beam that passes h above a point on the ground lands on the ground h / tan(its

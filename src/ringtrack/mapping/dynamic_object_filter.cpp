@@ -364,8 +364,7 @@ void DynamicObjectFilter::clear_seen_through(LoggedScan& logged,
       }
     } else {
       if (!visibility.sees_through(logged.points[i].cast<double>(), config_.free_space_margin_m,
-                                   config_.free_space_lateral_m,
-                                   config_.free_space_clearance_m)) {
+                                   config_.free_space_lateral_m, config_.free_space_clearance_m)) {
         continue;
       }
     }

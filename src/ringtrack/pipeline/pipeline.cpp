@@ -72,9 +72,10 @@ core::Pose Pipeline::to_local(const core::Pose& world) {
                            format_xyz(world.translation) + ", lies " +
                            format_m(local.translation.norm()) + " m from the run's local origin " +
                            format_xyz(origin_) + " (the first pose rounded to " +
-                           format_m(kOriginGridM) + " m); positions are kept in float relative "
-                           "to it, which allows at most " + format_m(reach_m) +
-                           " m (docs/inputs.md, \"Frames\"): split the run");
+                           format_m(kOriginGridM) +
+                           " m); positions are kept in float relative "
+                           "to it, which allows at most " +
+                           format_m(reach_m) + " m (docs/inputs.md, \"Frames\"): split the run");
   }
   return local;
 }
@@ -175,8 +176,7 @@ void Pipeline::remember(const core::OrganizedScan& scan, const core::Pose& pose,
   }
 }
 
-core::Motion Pipeline::sweep_motion(const core::OrganizedScan& scan,
-                                    const core::Pose& pose) const {
+core::Motion Pipeline::sweep_motion(const core::OrganizedScan& scan, const core::Pose& pose) const {
   // A scan without column times was measured all at once (or its times are lost): nothing to
   // spread over the sweep. After a long gap (skipped scans) the old motion says little.
   constexpr std::int64_t kLongestGapNs = 1'000'000'000;

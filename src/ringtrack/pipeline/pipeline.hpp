@@ -139,13 +139,13 @@ class Pipeline {
   /// The scene memory for this scan's sparse detections (nothing when there is none yet), and
   /// learns this scan into it afterwards (remember()).
   [[nodiscard]] const core::SceneMemory* scene_memory(bool resting) const;
-  void remember(const core::OrganizedScan& scan, const core::Pose& pose,
-                const core::Motion& motion, bool resting);
+  void remember(const core::OrganizedScan& scan, const core::Pose& pose, const core::Motion& motion,
+                bool resting);
   /// The sensor's motion during this scan, taken as the motion from the previous scan's pose.
   [[nodiscard]] core::Motion sweep_motion(const core::OrganizedScan& scan,
                                           const core::Pose& pose) const;
   std::optional<core::Pose> previous_pose_;  // of the last processed scan
-  std::optional<core::Pose> rest_pose_;  // where the sensor came to rest (background's pose)
+  std::optional<core::Pose> rest_pose_;      // where the sensor came to rest (background's pose)
   std::vector<std::uint8_t> labels_;
   FrameResult result_;
   std::uint64_t skipped_scans_{0};

@@ -4,8 +4,8 @@
 
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <numbers>
+#include <optional>
 #include <random>
 #include <vector>
 
@@ -22,7 +22,8 @@ Pose start_pose() {
   Pose p;
   p.stamp_ns = 5'000'000'000;
   p.translation = {1.0, -2.0, 2.5};
-  p.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()));
+  p.rotation =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.1, 0.2, 1.0).normalized()));
   return p;
 }
 
@@ -37,8 +38,8 @@ Motion turning() {
 // The sensor at a column's stamp: the naive reference (Eigen's angle-axis, no series).
 Pose column_pose(const OrganizedScan& scan, const Pose& pose, const Motion& motion, int column) {
   const double dt =
-      1e-9 * static_cast<double>(scan.column_stamp_ns[static_cast<std::size_t>(column)] -
-                                 scan.stamp_ns);
+      1e-9 *
+      static_cast<double>(scan.column_stamp_ns[static_cast<std::size_t>(column)] - scan.stamp_ns);
   return motion.advance(pose, dt);
 }
 
@@ -55,8 +56,8 @@ BeamRay naive_ray(const SensorModel& m, const OrganizedScan& scan, const Pose& s
 
 // What stands in the world besides the wall at x = 10: the ground, a pole, a person (a box).
 struct Scene {
-  bool ground{false};                        // the plane z = 0
-  std::optional<Eigen::Vector2d> pole;       // a vertical cylinder of radius 0.1 m, 0-3 m high
+  bool ground{false};                         // the plane z = 0
+  std::optional<Eigen::Vector2d> pole;        // a vertical cylinder of radius 0.1 m, 0-3 m high
   std::optional<Eigen::AlignedBox3d> person;  // an upright box
 };
 
@@ -207,9 +208,9 @@ TEST(VisibilityMotion, BoxesMatchTheNaiveReferenceOverEveryCell) {
     for (int b = 0; b < 40; ++b) {
       const double dist = 0.5 + 12.0 * u(rng);
       const double az = 2 * std::numbers::pi * u(rng);
-      const Eigen::Vector3d centre = pose.isometry() * Eigen::Vector3d(dist * std::cos(az),
-                                                                       dist * std::sin(az),
-                                                                       3 * (u(rng) - 0.5));
+      const Eigen::Vector3d centre =
+          pose.isometry() *
+          Eigen::Vector3d(dist * std::cos(az), dist * std::sin(az), 3 * (u(rng) - 0.5));
       const Eigen::Vector3d half(0.05 + u(rng), 0.05 + u(rng), 0.05 + u(rng));
       const Box3 box{(centre - half).cast<float>(), (centre + half).cast<float>()};
       // Reference: every cell's beam (cell_ray, checked against Eigen above) by slabs.
@@ -279,8 +280,9 @@ TEST(Motion, BetweenTwoPosesReproducesTheirInterpolation) {
   Pose b;
   b.stamp_ns = a.stamp_ns + 100'000'000;
   b.translation = a.translation + Eigen::Vector3d(0.4, -0.3, 0.05);
-  b.rotation = Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d(0.3, -0.1, 1.0).normalized())) *
-               a.rotation;
+  b.rotation =
+      Eigen::Quaterniond(Eigen::AngleAxisd(0.2, Eigen::Vector3d(0.3, -0.1, 1.0).normalized())) *
+      a.rotation;
   const Motion m = Motion::between(a, b);
   for (const double t : {0.0, 0.25, 0.5, 1.0, 1.5}) {
     const Pose want = Pose::interpolate(a, b, t);
@@ -342,7 +344,8 @@ struct Flight {
   }
 };
 
-const Eigen::AlignedBox3d kPersonBox(Eigen::Vector3d(7.0, 0.3, 0.0), Eigen::Vector3d(7.4, 0.7, 1.8));
+const Eigen::AlignedBox3d kPersonBox(Eigen::Vector3d(7.0, 0.3, 0.0),
+                                     Eigen::Vector3d(7.4, 0.7, 1.8));
 
 TEST(RecentViews, APersonWhereEarlierScansSawThroughIsNew) {
   Flight f;
