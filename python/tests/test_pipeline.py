@@ -111,13 +111,15 @@ def test_open_reports_a_missing_file_by_name(tmp_path):
 
 
 def assert_same_metrics(ours, theirs):
-    """Counts equal; distances within the rounding of the positions tracks.csv holds."""
+    """Counts equal; distances within the rounding of the positions tracks.csv holds (0.1 mm:
+    four decimals; the mean of a few hundred rounded distances moved by 1e-5 m once, with every
+    count equal)."""
     assert ours.keys() == theirs.keys()
     for key, value in theirs.items():
         if isinstance(value, int):
             assert ours[key] == value, key
         else:
-            assert ours[key] == pytest.approx(value, abs=1e-5), key
+            assert ours[key] == pytest.approx(value, abs=1e-4), key
 
 
 def test_recorded_sequence_matches_cli_run_and_eval(simulated_sequence, tmp_path):
