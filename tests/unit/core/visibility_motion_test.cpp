@@ -12,6 +12,7 @@
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/core/recent_views.hpp"
 #include "ringtrack/core/visibility.hpp"
+#include "support/naive_visibility.hpp"
 
 namespace ringtrack::core {
 namespace {
@@ -214,33 +215,8 @@ TEST(VisibilityMotion, BoxesMatchTheNaiveReferenceOverEveryCell) {
       const Eigen::Vector3d half(0.05 + u(rng), 0.05 + u(rng), 0.05 + u(rng));
       const Box3 box{(centre - half).cast<float>(), (centre + half).cast<float>()};
       // Reference: every cell's beam (cell_ray, checked against Eigen above) by slabs.
-      VisibilityCounts want;
-      for (int r = 0; r < m.rings(); ++r) {
-        for (int c = 0; c < m.columns(); ++c) {
-          const BeamRay ray = q.cell_ray(r, c);
-          double lo = 0.0;
-          double hi = std::numeric_limits<double>::infinity();
-          bool hit = true;
-          for (int k = 0; k < 3 && hit; ++k) {
-            const double a = (box.min[k] - ray.origin[k]) / ray.direction[k];
-            const double e = (box.max[k] - ray.origin[k]) / ray.direction[k];
-            lo = std::max(lo, std::min(a, e));
-            hi = std::min(hi, std::max(a, e));
-            hit = lo <= hi;
-          }
-          if (!hit) continue;
-          const std::size_t i = scan.index(r, c);
-          if (!scan.valid(i)) {
-            want.add(Visibility::kNoReturn);
-          } else if (scan.range_m(i) > hi + 0.1) {
-            want.add(Visibility::kFree);
-          } else if (scan.range_m(i) < lo - 0.1) {
-            want.add(Visibility::kOccluded);
-          } else {
-            want.add(Visibility::kOccupied);
-          }
-        }
-      }
+      std::vector<std::size_t> cells;
+      const VisibilityCounts want = testing::naive_in_box(q, box, 0.1, cells);
       ASSERT_EQ(q.in_box(box, 0.1), want) << "trial " << trial << " box " << b;
       nonempty += want.total() > 0 ? 1 : 0;
     }
