@@ -6,6 +6,7 @@
 #include <set>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/paths.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -45,7 +46,7 @@ std::vector<fs::path> files_from_metadata(const fs::path& folder) {
     std::vector<fs::path> files;
     for (const auto& node : paths) {
       const fs::path file = folder / node.as<std::string>();
-      if (!fs::is_regular_file(file)) {
+      if (!is_file(file)) {
         throw core::InputError(name + ": lists " + node.as<std::string>() + ", which is missing");
       }
       files.push_back(file);
@@ -117,8 +118,8 @@ struct McapBagReader::Impl {
 McapBagReader::McapBagReader(const fs::path& path) : impl_(std::make_unique<Impl>()) {
   Impl& m = *impl_;
   m.path = path;
-  if (fs::is_directory(path)) {
-    m.files = fs::exists(path / "metadata.yaml") ? files_from_metadata(path) : mcap_files_in(path);
+  if (is_folder(path)) {
+    m.files = is_file(path / "metadata.yaml") ? files_from_metadata(path) : mcap_files_in(path);
     if (m.files.empty()) throw core::InputError(path.string() + ": no .mcap files in the folder");
   } else {
     m.files.push_back(path);

@@ -7,6 +7,7 @@
 #include <map>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/paths.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -148,10 +149,10 @@ std::vector<fs::path> files_from_metadata(const fs::path& folder) {
       const fs::path relative(node.as<std::string>());
       // rosbag2 before Foxy listed paths relative to the bag's parent folder.
       fs::path file = folder / relative;
-      if (!fs::exists(file) && fs::exists(folder.parent_path() / relative)) {
+      if (!is_file(file) && is_file(folder.parent_path() / relative)) {
         file = folder.parent_path() / relative;
       }
-      if (!fs::is_regular_file(file)) {
+      if (!is_file(file)) {
         throw core::InputError(name + ": lists " + relative.string() + ", which is missing");
       }
       files.push_back(file);
@@ -212,11 +213,12 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : impl_(std::make_unique<Impl
   Impl& m = *impl_;
   m.path = path;
   const std::string name = path.string();
-  if (fs::is_directory(path)) {
-    if (fs::exists(path / "metadata.yaml")) {
+  if (is_folder(path)) {
+    if (is_file(path / "metadata.yaml")) {
       m.files = files_from_metadata(path);
     } else {
-      for (const auto& entry : fs::directory_iterator(path)) {
+      std::error_code ec;
+      for (const auto& entry : fs::directory_iterator(path, ec)) {
         if (entry.path().extension() == ".db3") m.files.push_back(entry.path());
       }
       std::sort(m.files.begin(), m.files.end());
@@ -225,7 +227,7 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : impl_(std::make_unique<Impl
                                ": not a rosbag2 folder (expected metadata.yaml or .db3 files)");
       }
     }
-  } else if (fs::is_regular_file(path)) {
+  } else if (is_file(path)) {
     m.files.push_back(path);
   } else {
     throw core::InputError(name + ": no such rosbag2 folder or .db3 file");

@@ -144,6 +144,19 @@ TEST_F(McapBag, EveryLayoutGivesTheScansOfTheSqliteBag) {
   EXPECT_TRUE(is_mcap_bag(tmp / "folder"));
   auto folder = open_scan_source((tmp / "folder").string(), defaults_);
   EXPECT_EQ(all_scans(*folder).size(), expected.size());
+
+  // A listed path the system refuses to look up (longer than NAME_MAX) is a missing file, not a
+  // std::filesystem_error.
+  test::write_text(tmp / "folder" / "metadata.yaml",
+                   "rosbag2_bagfile_information:\n  storage_identifier: mcap\n"
+                   "  relative_file_paths:\n    - " +
+                       std::string(5000, 'a') + "\n");
+  try {
+    McapBagReader reader(tmp / "folder");
+    ADD_FAILURE() << "a 5000-character file name was accepted";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("which is missing"), std::string::npos) << e.what();
+  }
 }
 
 TEST_F(McapBag, ACutOffBagGivesTheScansBeforeTheCutAndAWarning) {

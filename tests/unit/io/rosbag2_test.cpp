@@ -521,6 +521,11 @@ TEST(Rosbag2, CorruptBagsAreClearErrors) {
   expect_input_error([&] { Rosbag2Reader r(meta); }, {"relative_file_paths"});
   write_meta("rosbag2_bagfile_information:\n  relative_file_paths: [gone_0.db3]\n");
   expect_input_error([&] { Rosbag2Reader r(meta); }, {"gone_0.db3", "missing"});
+  // A listed path the system refuses to look up (longer than NAME_MAX) is missing too, not a
+  // std::filesystem_error (found by fuzz_rosbag2).
+  write_meta("rosbag2_bagfile_information:\n  relative_file_paths: [" + std::string(5000, 'a') +
+             "]\n");
+  expect_input_error([&] { Rosbag2Reader r(meta); }, {"aaaa", "missing"});
 
   // Not a database; a database without rosbag2 tables; nothing at all.
   const fs::path text = dir.path() / "text.db3";
