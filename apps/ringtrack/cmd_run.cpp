@@ -632,6 +632,8 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
       too_high += pipeline->detector_stats().too_high;
       detections += pipeline->detector_stats().detections;
       ++status.scans_processed;
+      const Eigen::Vector3d& origin = result.origin;
+      status.origin_m = {origin.x(), origin.y(), origin.z()};
       if (mcap) write_mcap_frame(*mcap, scan, pose, result, *pipeline, status.scans_processed);
       if (filtered) {
         filtered->hold(index, scan);

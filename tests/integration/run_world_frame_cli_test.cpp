@@ -132,6 +132,11 @@ TEST_F(RunCliWorldFrame, UtmShiftedPosesGiveTheSameTracksInTheUsersFrame) {
   EXPECT_TRUE(near_body == utm_body);
   EXPECT_NE(file_text(dir_ + "/out-utm/static_map.pcd").find("# origin_m 500000.000"),
             std::string::npos);
+  // run.json names the frame too, for programs that read it rather than the map headers.
+  EXPECT_EQ(nlohmann::json::parse(file_text(dir_ + "/out-utm/run.json"))["origin_m"],
+            nlohmann::json::array({500000.0, 5000000.0, 100.0}));
+  EXPECT_EQ(nlohmann::json::parse(file_text(dir_ + "/out-near/run.json"))["origin_m"],
+            nlohmann::json::array({0.0, 0.0, 0.0}));
 }
 
 // Ground truth in the user's frame scores the tracks in the user's frame as near the origin.

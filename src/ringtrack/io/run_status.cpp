@@ -48,6 +48,7 @@ std::string format_run_status(const RunStatus& s) {
   auto skipped = nlohmann::ordered_json::array();
   for (const auto& k : s.skipped) skipped.push_back({{"scan", k.index}, {"reason", k.reason}});
   j["skipped_scans"] = std::move(skipped);
+  if (s.origin_m) j["origin_m"] = *s.origin_m;
   j["started_utc"] = s.started_utc;
   j["ended_utc"] =
       s.ended_utc.empty() ? nlohmann::ordered_json() : nlohmann::ordered_json(s.ended_utc);

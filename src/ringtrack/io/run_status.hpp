@@ -4,8 +4,10 @@
 /// atomically, when the command ends, so a folder whose run.json does not say complete holds
 /// outputs that must not be trusted.
 
+#include <array>
 #include <cstdint>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -44,8 +46,11 @@ struct RunStatus {
   std::uint64_t scans_skipped_stamp{0};  ///< whose stamp did not come after the previous scan's
   std::uint64_t scans_failed{0};         ///< the scan whose error stopped the command (0 or 1)
   std::vector<SkippedScan> skipped;      ///< the skipped scans (at most kMaxListedSkippedScans)
-  std::string started_utc;               ///< ISO 8601, set by RunStatusFile::start()
-  std::string ended_utc;                 ///< ISO 8601, set when the state leaves kRunning
+  /// The origin of the local frame the maps are written in (world = map point + origin, m);
+  /// unset until the first scan is processed and for commands without maps.
+  std::optional<std::array<double, 3>> origin_m;
+  std::string started_utc;  ///< ISO 8601, set by RunStatusFile::start()
+  std::string ended_utc;    ///< ISO 8601, set when the state leaves kRunning
 
   /// True when the outputs are whole: finished, or interrupted after closing them.
   [[nodiscard]] bool complete() const {

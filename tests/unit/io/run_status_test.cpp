@@ -45,6 +45,7 @@ TEST(RunStatus, RunningThenFinishedWithCountsAndSkippedScans) {
   EXPECT_EQ(j["version"], "1.2.3");
   EXPECT_EQ(j["arguments"].size(), 5u);
   EXPECT_EQ(j["started_utc"].get<std::string>().size(), 20u);  // 2026-11-26T07:15:13Z
+  EXPECT_FALSE(j.contains("origin_m")) << "no scan processed yet: no frame";
 
   file.status().scans_read = 10;
   file.status().scans_processed = 8;
@@ -52,6 +53,7 @@ TEST(RunStatus, RunningThenFinishedWithCountsAndSkippedScans) {
   file.status().scans_skipped_stamp = 1;
   file.status().add_skipped(3, "unreadable: x.pcd: truncated");
   file.status().add_skipped(7, "stamp goes back");
+  file.status().origin_m = {{500000.0, 5000000.0, 100.0}};
   file.finish();
   j = read_json(dir / "run.json");
   EXPECT_EQ(j["complete"], true);
@@ -66,6 +68,7 @@ TEST(RunStatus, RunningThenFinishedWithCountsAndSkippedScans) {
   EXPECT_EQ(j["skipped_scans"][0]["scan"], 3);
   EXPECT_EQ(j["skipped_scans"][0]["reason"], "unreadable: x.pcd: truncated");
   EXPECT_FALSE(j["ended_utc"].is_null());
+  EXPECT_EQ(j["origin_m"], nlohmann::json::array({500000.0, 5000000.0, 100.0}));
   // Written through a temporary file that is renamed: nothing is left beside it.
   EXPECT_FALSE(std::filesystem::exists(dir / "run.json.tmp"));
 }
