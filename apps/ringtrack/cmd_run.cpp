@@ -22,11 +22,11 @@
 #include "ringtrack/io/bad_scans.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/foxglove_sink.hpp"
-#include "ringtrack/io/mcap_bag_reader.hpp"
 #include "ringtrack/io/output_file.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/ply.hpp"
 #include "ringtrack/io/poses.hpp"
+#include "ringtrack/io/rosbag_reader.hpp"
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/sequence.hpp"
 #include "ringtrack/io/text.hpp"
@@ -86,9 +86,8 @@ bool use_odometry(const std::string& mode, const std::string& input, const std::
     return false;
   }
   if (mode == "on") return true;
-  const bool folder = std::filesystem::is_directory(input) && format == "auto" &&
-                      !std::filesystem::exists(std::filesystem::path(input) / "metadata.yaml") &&
-                      !io::is_mcap_bag(input);
+  const bool folder =
+      std::filesystem::is_directory(input) && format == "auto" && !io::is_rosbag2_path(input);
   return !folder;
 }
 
@@ -215,7 +214,7 @@ class RunInput {
   }
 
   void open(const RunOptions& o) {
-    if (std::filesystem::is_directory(o.input) && !is_rosbag2_folder(o.input) &&
+    if (std::filesystem::is_directory(o.input) && !io::is_rosbag2_path(o.input) &&
         o.source.format == "auto") {
       io::SequenceReadOptions read_options;
       read_options.scan_rate_hz = o.source.scan_rate_hz;  // plain folders without stamps
@@ -389,11 +388,6 @@ class RunInput {
     if (i + 1 < sequence_->size() && forward(i)) return i;
     if (i > 0 && forward(i - 1)) return i - 1;
     return std::nullopt;
-  }
-
-  static bool is_rosbag2_folder(const std::string& path) {
-    return std::filesystem::exists(std::filesystem::path(path) / "metadata.yaml") ||
-           io::is_mcap_bag(path);
   }
 
   bool odometry_{false};  // poses come from the odometry, not from the input

@@ -7,6 +7,8 @@
 #include <algorithm>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <string>
 
 #include "ringtrack/io/pcap_reader.hpp"
 #include "ringtrack/io/rosbag_source.hpp"
@@ -94,8 +96,9 @@ TEST(ConvertBagCli, Ros1BagOfPacketsGivesTheirScans) {
   fs::remove_all(dir);
 }
 
-TEST(ConvertBagCli, PointCloudTopicsGiveOneScanPerCloud) {
-  const std::string dir = testing::make_temp_dir("ringtrack-convert-bag-");
+// A rosbag2 folder (sqlite3) with an empty packet topic and four PointCloud2 messages of 160
+// points each on /velodyne_points.
+void write_cloud_bag(const std::string& folder) {
   const auto model = core::SensorModel::vlp16();
   std::vector<test::TestBagMessage> messages;
   for (int m = 0; m < 4; ++m) {
@@ -111,10 +114,15 @@ TEST(ConvertBagCli, PointCloudTopicsGiveOneScanPerCloud) {
                         test::serialize_pointcloud2(test::make_xyzirt_cloud(pts, 1, 160, stamp),
                                                     test::RosEncoding::kCdr)});
   }
-  test::write_rosbag2(dir + "/bag",
+  test::write_rosbag2(folder,
                       {{"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"},
                        {"/velodyne_points", "sensor_msgs/msg/PointCloud2"}},
                       messages);
+}
+
+TEST(ConvertBagCli, PointCloudTopicsGiveOneScanPerCloud) {
+  const std::string dir = testing::make_temp_dir("ringtrack-convert-bag-");
+  write_cloud_bag(dir + "/bag");
   const auto r =
       run_command(kCli + " convert " + dir + "/bag --topic /velodyne_points --out " + dir + "/seq");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -123,6 +131,24 @@ TEST(ConvertBagCli, PointCloudTopicsGiveOneScanPerCloud) {
   EXPECT_EQ(reader.meta().sensor, "vlp16");
   io::SequenceScan s;
   while (reader.next(s)) EXPECT_EQ(s.scan.valid_count(), 160u);
+  fs::remove_all(dir);
+}
+
+// A rosbag2 folder whose metadata.yaml is gone (a recording cut short before rosbag2 wrote it)
+// holds only .db3 files: `run` reads it as a bag, as `convert` does, not as a folder of scans.
+TEST(ConvertBagCli, RunReadsABagFolderWithoutMetadata) {
+  const std::string dir = testing::make_temp_dir("ringtrack-run-bag-");
+  write_cloud_bag(dir + "/bag");
+  ASSERT_TRUE(fs::remove(dir + "/bag/metadata.yaml"));
+  const auto r = run_command(
+      kCli + " run " + dir +
+      "/bag --topic /velodyne_points --odometry off --no-plots --quiet --out " + dir + "/out");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream timing(dir + "/out/timing.csv");
+  std::string line;
+  int rows = -1;  // the header
+  while (std::getline(timing, line)) ++rows;
+  EXPECT_EQ(rows, 4);
   fs::remove_all(dir);
 }
 
