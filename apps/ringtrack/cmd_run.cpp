@@ -324,6 +324,10 @@ class RunInput {
   [[nodiscard]] std::uint64_t unreadable() const {
     return sequence_ ? sequence_skipped_ : reader_->skipped();
   }
+  /// The sensor's height above the ground that a sequence folder states (simulated ones do).
+  [[nodiscard]] std::optional<double> stated_sensor_height() const {
+    return sequence_ ? sequence_->meta().sensor_height_m : std::nullopt;
+  }
   /// The sensor that took the scans (for recordings known once the first scan was read).
   [[nodiscard]] const core::SensorModel& sensor_model() const {
     return sequence_ ? sequence_->sensor() : source_->model();
@@ -725,6 +729,11 @@ void run(const RunOptions& o) {
                    status.add_skipped(index, "unreadable: " + error);
                    warnings.warn(index, "unreadable, skipped: " + error);
                  });
+  // A simulated sequence knows how high its sensor stands; the user's configuration wins.
+  const auto height = input.stated_sensor_height();
+  if (height && !o.config.sets("detection.sensor_height_m")) {
+    config.detection.sensor_height_m = *height;
+  }
 
   std::error_code ec;
   fs::create_directories(o.out, ec);

@@ -70,6 +70,9 @@ void run_simulate(const SimulateOptions& o) {
       scenario.number > 0 ? std::to_string(scenario.number) + " " + scenario.name : scenario.name;
   if (scenario.sensor.motion == sim::SensorMotion::kFigure8) meta.scenario += " (moving sensor)";
   meta.seed = o.seed;
+  // The pipeline's ground (detection.sensor_height_m) for `run` on this sequence.
+  meta.sensor_height_m =
+      sim::sensor_pose(scenario.sensor, 0).translation.z() - scenario.ground.height_m;
   io::SequenceWriteOptions wo;
   wo.overwrite = o.overwrite;
   io::SequenceWriter writer(o.out, meta, wo);

@@ -20,6 +20,8 @@ struct ConfigOptions {
   void add_to(CLI::App& command);
   /// Defaults, then the file, then each --set in order; throws core::ConfigError.
   [[nodiscard]] core::Config load() const;
+  /// True when the file or a --set gives `key` (section.name) a value.
+  [[nodiscard]] bool sets(const std::string& key) const;
 };
 
 /// The input and decoder options `run` and `convert` share (docs/inputs.md): one definition, so

@@ -8,8 +8,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "ringtrack/core/config.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/pcd.hpp"
+#include "ringtrack/io/sequence.hpp"
 #include "ringtrack/io/text.hpp"
 #include "support/run_command.hpp"
 
@@ -248,6 +250,32 @@ TEST_F(RunCli, UnknownConfigKeyFailsBeforeAnyOutput) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("tracking.nope"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir_ + "/o5/tracks.csv"));
+}
+
+// The hall's sensor stands 1.2 m above its floor, not the default 2.5 m: the simulated sequence
+// says so and `run` takes it (the altitude test counts from the floor), unless the user's
+// configuration sets the key, in a file or with --set.
+TEST_F(RunCli, ASimulatedSequenceGivesItsSensorHeight) {
+  const std::string hall = dir_ + "/hall";
+  ASSERT_EQ(run_command(kCli + " simulate 7 --duration 0.5 --out " + hall).exit_code, 0);
+  const auto meta = io::read_sequence_yaml(hall + "/sequence.yaml");
+  ASSERT_TRUE(meta.sensor_height_m);
+  EXPECT_NEAR(*meta.sensor_height_m, 1.2, 1e-9);
+  const auto height_used = [&](const std::string& out, const std::string& options) {
+    const auto r =
+        run_command(kCli + " run " + hall + " --no-plots --quiet --out " + out + " " + options);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    core::Config used;
+    core::apply_config_file(used, out + "/config.yaml");
+    return used.detection.sensor_height_m;
+  };
+  EXPECT_NEAR(height_used(dir_ + "/h1", ""), 1.2, 1e-9);
+  EXPECT_NEAR(height_used(dir_ + "/h2", "--set detection.sensor_height_m=2.5"), 2.5, 1e-9);
+  std::ofstream(dir_ + "/height.yaml") << "detection:\n  sensor_height_m: 3.0\n";
+  EXPECT_NEAR(height_used(dir_ + "/h3", "--config " + dir_ + "/height.yaml"), 3.0, 1e-9);
+  // Another key in the file leaves the sequence's height in force.
+  std::ofstream(dir_ + "/other.yaml") << "detection:\n  min_height_m: 0.7\n";
+  EXPECT_NEAR(height_used(dir_ + "/h4", "--config " + dir_ + "/other.yaml"), 1.2, 1e-9);
 }
 
 }  // namespace

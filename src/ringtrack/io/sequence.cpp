@@ -209,11 +209,16 @@ SequenceMeta read_sequence_yaml(const fs::path& path) {
       meta.scenario = yaml_as<std::string>(value, where, "a string or number");
     } else if (key == "seed") {
       meta.seed = yaml_as<std::uint64_t>(value, where, "a non-negative integer");
+    } else if (key == "sensor_height_m") {
+      meta.sensor_height_m = yaml_as<double>(value, where, "a number");
+      if (!(std::abs(*meta.sensor_height_m) <= 1000.0)) {
+        throw core::InputError(where + ": expected a height within +-1000 m of the ground");
+      }
     } else {
       throw core::InputError(where +
                              ": unknown key (expected format_version, sensor, "
                              "elevations_deg, max_range_m, scan_rate_hz, columns, scans, name, "
-                             "scenario, seed)");
+                             "scenario, seed, sensor_height_m)");
     }
   }
   const auto missing = [&](bool have, const char* key) {
@@ -254,6 +259,9 @@ std::string format_sequence_yaml(const SequenceMeta& meta) {
     out << YAML::Key << "scenario" << YAML::Value << YAML::DoubleQuoted << meta.scenario;
   }
   if (meta.seed) out << YAML::Key << "seed" << YAML::Value << *meta.seed;
+  if (meta.sensor_height_m) {
+    out << YAML::Key << "sensor_height_m" << YAML::Value << *meta.sensor_height_m;
+  }
   out << YAML::EndMap;
   std::string text = "# ringtrack sequence folder, see docs/formats.md\n";
   text += out.c_str();

@@ -36,6 +36,9 @@ struct SequenceMeta {
   std::string name;                    ///< optional free text
   std::string scenario;                ///< optional: the simulator scenario (number or name)
   std::optional<std::uint64_t> seed;   ///< optional: the simulator seed
+  /// optional: the sensor's height above the ground at the first scan (m), as the simulator
+  /// knows it; `run` takes it for detection.sensor_height_m unless the configuration sets that.
+  std::optional<double> sensor_height_m;
 
   /// The sensor model: a built-in by name, or generic from elevations_deg; throws core::Error
   /// when the description is inconsistent.

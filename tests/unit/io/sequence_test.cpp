@@ -316,6 +316,13 @@ TEST(Sequence, YamlIsStrict) {
   EXPECT_NE(e.find("invalid YAML"), std::string::npos) << e;
   e = yaml_error("- a list\n");
   EXPECT_NE(e.find("expected a mapping"), std::string::npos) << e;
+  e = yaml_error(good + "sensor_height_m: .nan\n");
+  EXPECT_NE(e.find("key 'sensor_height_m': expected a height within +-1000 m"), std::string::npos)
+      << e;
+  EXPECT_FALSE(meta.sensor_height_m) << "optional: absent in sequences that do not know it";
+  test::TempDir other;  // yaml_error's folder of the same name is gone by now
+  test::write_text(other / "height.yaml", good + "sensor_height_m: 1.2\n");
+  EXPECT_EQ(read_sequence_yaml(other / "height.yaml").sensor_height_m, 1.2);
 }
 
 TEST(Sequence, ReadsPlainFolderOfPcdFiles) {
