@@ -47,9 +47,9 @@ class SequenceIterator {
       more = reader_.next(s);
     }
     if (!more) throw py::stop_iteration();
-    py::object labels = s.labels.empty()
-                            ? py::object(py::none())
-                            : py::object(copy_of(s.labels.data(), {s.scan.rings(), s.scan.columns()}));
+    py::object labels =
+        s.labels.empty() ? py::object(py::none())
+                         : py::object(copy_of(s.labels.data(), {s.scan.rings(), s.scan.columns()}));
     return py::make_tuple(std::move(s.scan), s.pose, labels);
   }
   const io::SequenceReader& reader() const { return reader_; }
@@ -90,9 +90,8 @@ void bind_sources(py::module_& m) {
         return std::make_unique<SourceIterator>(
             input, source_options(format, topic, sensor, calibration, metadata, scan_rate_hz));
       },
-      py::arg("input"), py::arg("format") = "auto", py::arg("topic") = "",
-      py::arg("sensor") = "", py::arg("calibration") = "", py::arg("metadata") = "",
-      py::arg("scan_rate_hz") = 10.0,
+      py::arg("input"), py::arg("format") = "auto", py::arg("topic") = "", py::arg("sensor") = "",
+      py::arg("calibration") = "", py::arg("metadata") = "", py::arg("scan_rate_hz") = 10.0,
       "Opens a pcap/pcapng capture, a ROS 1 bag, a ROS 2 bag (sqlite3 or MCAP) or udp://HOST:PORT "
       "(docs/inputs.md); Hesai needs calibration=, Ouster metadata=.");
 
@@ -115,10 +114,14 @@ void bind_sources(py::module_& m) {
       .def("__iter__", [](SequenceIterator& s) -> SequenceIterator& { return s; })
       .def("__next__", &SequenceIterator::next)
       .def("__len__", [](const SequenceIterator& s) { return s.reader().size(); })
-      .def_property_readonly("model",
-                             [](const SequenceIterator& s) { return s.reader().sensor(); })
+      .def_property_readonly("model", [](const SequenceIterator& s) { return s.reader().sensor(); })
       .def_property_readonly("has_poses",
                              [](const SequenceIterator& s) { return s.reader().has_poses(); })
+      .def_property_readonly("sensor_height_m",
+                             [](const SequenceIterator& s) -> py::object {
+                               const auto h = s.reader().meta().sensor_height_m;
+                               return h ? py::object(py::float_(*h)) : py::object(py::none());
+                             })
       .def_property_readonly("objects_csv", [](const SequenceIterator& s) -> py::object {
         const auto p = s.reader().objects_csv();
         return p ? py::object(py::str(p->string())) : py::object(py::none());

@@ -83,6 +83,8 @@ def test_sequence_iterates_scans_poses_and_labels(simulated_sequence):
     seq, _ = simulated_sequence
     sequence = rt.Sequence(str(seq))
     assert len(sequence) == 40 and sequence.has_poses
+    # The simulator's mast: give it to Config().set("detection.sensor_height_m", ...) as `run` does.
+    assert sequence.sensor_height_m == pytest.approx(2.5)
     assert sequence.objects_csv.endswith("objects.csv")
     scans = list(sequence)
     scan, pose, labels = scans[0]
