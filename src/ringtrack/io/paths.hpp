@@ -1,7 +1,7 @@
 #pragma once
-// Filesystem checks that answer "no" instead of throwing. Paths named by outside data (a bag's
-// metadata.yaml, a sequence's file list) may be ones the system rejects, too long or a loop of
-// links; that is bad input to report with the reader's own message, not a std::filesystem_error.
+// Filesystem checks that answer "no" instead of throwing. Paths named by outside data (the files
+// a bag's metadata.yaml lists) may be ones the system rejects, too long or a loop of links; that
+// is bad input to report with the reader's own message, not a std::filesystem_error.
 #include <filesystem>
 #include <system_error>
 
