@@ -112,6 +112,50 @@ TEST(VelodyneUdp, SlowConsumerLosesWholeScansAndTheyAreCounted) {
   EXPECT_NE(source.summary().find("scans dropped"), std::string::npos);
 }
 
+// A lossy, reordering network: every tenth datagram lost and every 25th pair swapped. The live
+// source keeps going and gives exactly what the decoder makes of the same datagrams offline
+// (loopback keeps their order), with the loss and the reordering counted and named.
+TEST(VelodyneUdp, LossAndReorderingAreCountedAndTheStreamGoesOn) {
+  const auto all = packets(5.3);
+  std::vector<test::EncodedVelodynePacket> ps;
+  for (std::size_t i = 0; i < all.size(); ++i) {
+    if (i % 10 != 9) ps.push_back(all[i]);
+  }
+  for (std::size_t i = 20; i + 1 < ps.size(); i += 25) std::swap(ps[i], ps[i + 1]);
+  VelodyneUdpOptions options;
+  options.host = "127.0.0.1";
+  options.port = 0;
+  options.max_queued_scans = 100;
+  VelodyneUdpSource source(options);
+  replay(ps, source.port());
+  for (int i = 0; i < 200 && source.stats().datagrams < ps.size(); ++i)
+    std::this_thread::sleep_for(10ms);
+  source.stop();
+  EXPECT_EQ(source.stats().datagrams, ps.size()) << source.summary();
+
+  VelodyneDecoder offline;
+  for (const auto& p : ps) offline.add_packet(p.payload, p.host_stamp_ns);
+  offline.finish();
+  std::vector<core::OrganizedScan> expected;
+  while (auto s = offline.pop_scan()) expected.push_back(std::move(*s));
+  std::vector<core::OrganizedScan> scans;
+  while (auto s = source.next(0ms)) scans.push_back(std::move(*s));
+  ASSERT_GE(expected.size(), 4u) << "the stream must go on past the losses";
+  ASSERT_EQ(scans.size(), expected.size()) << source.summary();
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    EXPECT_EQ(scans[s].statuses(), expected[s].statuses()) << "scan " << s;
+  }
+  const auto live = source.decoder_stats();
+  const auto& direct = offline.stats();
+  EXPECT_GT(direct.lost_sequences, 0u);
+  EXPECT_GT(direct.out_of_order, 0u);
+  EXPECT_EQ(live.lost_sequences, direct.lost_sequences);
+  EXPECT_EQ(live.out_of_order, direct.out_of_order);
+  EXPECT_EQ(live.decoded_packets, direct.decoded_packets);
+  EXPECT_NE(source.summary().find("lost firing sequences"), std::string::npos) << source.summary();
+  EXPECT_NE(source.summary().find("skipped packets"), std::string::npos) << source.summary();
+}
+
 TEST(VelodyneUdp, ErrorsOfTheReceiverReachTheConsumer) {
   VelodyneUdpOptions options;
   options.host = "127.0.0.1";
