@@ -23,6 +23,7 @@
 #include <fstream>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -30,7 +31,7 @@
 #include <vector>
 
 #include "ringtrack/core/config.hpp"
-#include "ringtrack/pipeline/deskew.hpp"
+#include "ringtrack/experiment/benchmark_case.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
 #include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/simulator.hpp"
@@ -39,7 +40,6 @@ namespace {
 
 using namespace ringtrack;
 using Clock = std::chrono::steady_clock;
-constexpr double kPi = 3.14159265358979323846;
 
 struct Options {
   std::int64_t scans{100'000};
@@ -224,10 +224,8 @@ sim::Scenario soak_scenario(const Options& o, bool moving, std::int64_t scans) {
 // Scans in two periods of the figure 8 (its height and yaw repeat every 4 pi / w), so that the
 // replayed poses continue almost seamlessly at the block boundary.
 std::int64_t default_block(const sim::Scenario& s) {
-  const double r = s.sensor.figure8_radius_m;
-  const double w = s.sensor.max_speed_mps / (r * std::sqrt(2.0));
   const double rate_hz = core::SensorModel::by_name(s.sensor.model).scan_rate_hz;
-  return std::llround(2.0 * 4.0 * kPi / w * rate_hz);
+  return std::llround(2.0 * 4.0 * std::numbers::pi / sim::figure8_rate(s.sensor) * rate_hz);
 }
 
 struct Feed {
@@ -236,14 +234,9 @@ struct Feed {
 };
 
 // Simulates the next scan into feed; a moving sensor's scan is motion-compensated as a pose
-// source's would be (deskew).
+// source's would be (deskew), as `ringtrack benchmark` does.
 void simulate_next(sim::Simulator& simulator, sim::SimulatedScan& buffer, bool moving, Feed& feed) {
-  const std::int64_t k = simulator.next_index();
-  simulator.next(buffer);
-  feed.pose = buffer.pose;
-  if (moving)
-    feed.pose = pipeline::deskew_scan(buffer.scan, buffer.pose,
-                                      simulator.sensor_pose_at(simulator.scan_stamp_ns(k + 1)));
+  feed.pose = experiment::next_simulated_scan(simulator, buffer, moving);
   feed.scan = buffer.scan;
 }
 
@@ -336,7 +329,8 @@ void print_stream(const Stream& stream) {
   const auto after_last = sim.sensor_pose_at(sim.scan_stamp_ns(stream.block_size()));
   const auto first = sim.sensor_pose_at(0);
   const double jump_m = (after_last.translation - first.translation).norm();
-  const double jump_deg = after_last.rotation.angularDistance(first.rotation) * 180.0 / kPi;
+  const double jump_deg =
+      after_last.rotation.angularDistance(first.rotation) * 180.0 / std::numbers::pi;
   std::printf(
       "stream: a block of %lld simulated scans (%.1f s, about %.0f MB held) replayed cyclically, "
       "stamps continuing (%.0f ms apart), fresh range noise each pass; at each block boundary the "

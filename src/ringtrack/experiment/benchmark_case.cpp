@@ -143,8 +143,8 @@ BenchmarkCase run_case(const sim::Scenario& scenario, const core::SensorModel& m
 }
 
 // Processes every scan of a recorded sequence and records the results.
-void run_scans(const RecordedSequence& recorded, const core::Config& config,
-               CaseRecorder& recorder, BenchmarkCase& out) {
+void run_scans(const RecordedSequence& recorded, const core::Config& config, CaseRecorder& recorder,
+               BenchmarkCase& out) {
   pipeline::Pipeline pipeline(config, recorded.model());
   for (std::size_t k = 0; k < recorded.size(); ++k) {
     const auto t0 = Clock::now();
@@ -175,17 +175,20 @@ const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>>& s
   return kStages;
 }
 
+core::Pose next_simulated_scan(sim::Simulator& simulator, sim::SimulatedScan& scan, bool deskew) {
+  const std::int64_t k = simulator.next_index();
+  simulator.next(scan);
+  if (!deskew) return scan.pose;
+  const std::int64_t next = simulator.scan_stamp_ns(k + 1);
+  return pipeline::deskew_scan(scan.scan, scan.pose, simulator.sensor_pose_at(next));
+}
+
 BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Config& config,
                                  const BenchmarkCaseOptions& options) {
   sim::Simulator simulator(scenario, options.seed);
   const bool deskew = scenario.sensor.motion != sim::SensorMotion::kStatic && options.deskew;
-  const ScanFeed feed = [&](std::int64_t k, sim::SimulatedScan& scan, core::Pose& pose) {
-    simulator.next(scan);
-    pose = scan.pose;
-    if (deskew) {
-      const std::int64_t next = simulator.scan_stamp_ns(k + 1);
-      pose = pipeline::deskew_scan(scan.scan, scan.pose, simulator.sensor_pose_at(next));
-    }
+  const ScanFeed feed = [&](std::int64_t, sim::SimulatedScan& scan, core::Pose& pose) {
+    pose = next_simulated_scan(simulator, scan, deskew);
   };
   return run_case(scenario, simulator.model(), simulator.scan_count(), feed, config, options);
 }
@@ -195,8 +198,8 @@ BenchmarkCase run_benchmark_case(const RecordedScenario& recorded, const core::C
   const ScanFeed feed = [&](std::int64_t k, sim::SimulatedScan& scan, core::Pose& pose) {
     recorded.expand(static_cast<std::size_t>(k), scan, pose);
   };
-  return run_case(recorded.scenario(), recorded.model(),
-                  static_cast<std::int64_t>(recorded.size()), feed, config, options);
+  return run_case(recorded.scenario(), recorded.model(), static_cast<std::int64_t>(recorded.size()),
+                  feed, config, options);
 }
 
 BenchmarkCase run_benchmark_case(const RecordedSequence& recorded, const core::Config& config,

@@ -64,6 +64,11 @@ struct BenchmarkCase {
   double pipeline_s{0};  ///< wall time in the pipeline (process + finish)
 };
 
+/// Simulates the simulator's next scan into `scan` and returns the pose to give the pipeline:
+/// the scan's own, or with `deskew` (a moving sensor) the scan motion-compensated in place from
+/// its pose to the next scan's (pipeline::deskew_scan) and the pose of its first column.
+core::Pose next_simulated_scan(sim::Simulator& simulator, sim::SimulatedScan& scan, bool deskew);
+
 /// Simulates the scenario (its duration as given), runs a fresh pipeline with config on every
 /// scan and evaluates. Map metrics: a point is dynamic when it belongs to an object that moves
 /// in any scan of the run; it counts as removed when the filter's final decision (when the scan

@@ -512,9 +512,9 @@ void validate(const Scenario& s, const std::string& src) {
   for (const auto& [key, count] : {std::pair{"people", s.people}, std::pair{"robots", s.robots},
                                    std::pair{"drones", s.drones}}) {
     if (count < 0 || count > kMaxActorsPerKind) {
-      fail(src, "actors", std::string(key) + " must be in [0, " +
-                              std::to_string(kMaxActorsPerKind) + "] (got " +
-                              std::to_string(count) + ")");
+      fail(src, "actors",
+           std::string(key) + " must be in [0, " + std::to_string(kMaxActorsPerKind) + "] (got " +
+               std::to_string(count) + ")");
     }
   }
   for (std::size_t i = 0; i < s.boxes.size(); ++i) {
@@ -623,6 +623,11 @@ void validate(const Scenario& s, const std::string& src) {
   validate_sensor_path(s, src);
 }
 
+double figure8_rate(const SensorSpec& s) {
+  // Lemniscate of Gerono: peak speed R w sqrt(2).
+  return s.max_speed_mps / (s.figure8_radius_m * std::sqrt(2.0));
+}
+
 core::Pose sensor_pose(const SensorSpec& s, std::int64_t t_ns) {
   core::Pose p;
   p.stamp_ns = t_ns;
@@ -634,7 +639,7 @@ core::Pose sensor_pose(const SensorSpec& s, std::int64_t t_ns) {
     case SensorMotion::kFigure8: {
       // Lemniscate of Gerono: x = R sin(wt), y = R sin(wt) cos(wt); peak speed R w sqrt(2).
       const double r = s.figure8_radius_m;
-      const double w = s.max_speed_mps / (r * std::sqrt(2.0));
+      const double w = figure8_rate(s);
       const double sw = std::sin(w * t);
       const double s2 = std::sin(2 * w * t);
       p.translation =

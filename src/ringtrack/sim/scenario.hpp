@@ -147,6 +147,10 @@ void validate(const Scenario& s, const std::string& source = "scenario");
 /// Sensor-to-world pose of the sensor spec at time t_ns (static, figure 8 or keyframes).
 core::Pose sensor_pose(const SensorSpec& sensor, std::int64_t t_ns);
 
+/// Angular rate w (rad/s) of the figure 8 (figure8_radius_m, max_speed_mps): the path repeats
+/// every 2 pi / w, its height and yaw every 4 pi / w.
+double figure8_rate(const SensorSpec& sensor);
+
 /// Number and name of each built-in scenario.
 struct ScenarioInfo {
   int number;
