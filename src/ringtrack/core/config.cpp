@@ -308,6 +308,11 @@ class Schema {
     integer("dynamic_confirm_scans", t.dynamic_confirm_scans, 1, 1000000,
             "the footprint and distance test must hold in this many consecutive scans with a "
             "strict (not relaxed) detection before a hypothesis turns dynamic");
+    number("dynamic_streak_min_m", t.dynamic_streak_min_m, 0.0, 100.0,
+           "box test: the measured centre must also cover this much (horizontally) between the "
+           "first and the last scan of that streak, within 3 x dynamic_confirm_scans scans, "
+           "else the streak starts over (m); static clutter re-acquired elsewhere stands still, "
+           "a walker does not; 0 = off");
     integer("rest_scans_to_static", t.rest_scans_to_static, 0, 1000000,
             "a dynamic hypothesis whose reported speed stays zero this many scans is static again "
             "(ever_dynamic stays set); 0 = dynamic forever");

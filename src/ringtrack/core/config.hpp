@@ -110,6 +110,7 @@ struct TrackingConfig {
   double max_speed_kmh{15.0};              // speeds are capped here (state and report)
   double dynamic_min_distance_m{1.5};  // besides disjoint footprints, the centre must move this far
   int dynamic_confirm_scans{5};        // ... in this many consecutive strict detections
+  double dynamic_streak_min_m{0.5};    // ... while the centre covers this much (m)
   int rest_scans_to_static{30};  // dynamic hypotheses at rest this long turn static (0 = never)
   DynamicTest dynamic_test{DynamicTest::kFreeSpace};  // free_space needs the scan (Pipeline)
   double free_space_margin_m{0.3};        // a beam ending this far beyond a point sees it free

@@ -535,7 +535,7 @@ void Tracker::classify_by_free_space(Hypothesis& h) const {
   const int min_free = std::min<int>(2, static_cast<int>(h.anchor_points.size()));
   const bool left = moved > config_.free_space_min_distance_m && free >= min_free &&
                     free >= config_.free_space_min_share * (free + counts.occupied);
-  h.moved_scans = left ? h.moved_scans + 1 : 0;
+  extend_streak(h, left);
   if (h.moved_scans >= config_.free_space_confirm_scans) {
     h.dynamic = h.ever_dynamic = true;
     h.rest_scans = 0;
@@ -552,16 +552,33 @@ void Tracker::classify_by_box(Hypothesis& h) const {
   if (h.last_detection.relaxed) return;
   const double moved =
       (h.last_detection.centroid.cast<double>() - h.anchor_position).head<2>().norm();
-  if (!footprints_intersect(h.box, h.anchor_box) && moved > config_.dynamic_min_distance_m) {
-    ++h.moved_scans;
-  } else {
-    h.moved_scans = 0;
-  }
-  if (h.moved_scans >= config_.dynamic_confirm_scans) {
+  extend_streak(
+      h, !footprints_intersect(h.box, h.anchor_box) && moved > config_.dynamic_min_distance_m);
+  if (h.moved_scans < config_.dynamic_confirm_scans) return;
+  // Far from its anchor is not yet moving: a moving sensor's tracker loses static clutter and
+  // re-acquires it on a neighbouring post or bush 1-4 m away, where it then stands still (the
+  // moving park's false positives, docs/BENCHMARK.md). A walker also covers ground during the
+  // streak; clutter stays put. A streak that covered too little within kStreakSpan times the
+  // confirmation length starts over, so slow drift of a cluster's centre never adds up.
+  constexpr int kStreakSpan = 3;
+  const double covered =
+      (h.last_detection.centroid.cast<double>() - h.streak_start).head<2>().norm();
+  if (covered >= config_.dynamic_streak_min_m) {
     h.dynamic = h.ever_dynamic = true;
     h.rest_scans = 0;
     h.moved_scans = 0;
+  } else if (h.moved_scans >= kStreakSpan * config_.dynamic_confirm_scans) {
+    h.moved_scans = 0;
   }
+}
+
+void Tracker::extend_streak(Hypothesis& h, bool held) {
+  if (!held) {
+    h.moved_scans = 0;
+    return;
+  }
+  if (h.moved_scans == 0) h.streak_start = h.last_detection.centroid.cast<double>();
+  ++h.moved_scans;
 }
 
 int missed_scans_until_deletion(const core::TrackingConfig& config, const Eigen::Matrix3d& r_create,

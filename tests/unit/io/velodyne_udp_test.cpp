@@ -7,10 +7,13 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
+#include <filesystem>
 #include <thread>
 #include <vector>
 
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/io/pcap_reader.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/io/velodyne_udp_source.hpp"
 #include "support/velodyne_encoder.hpp"
@@ -154,6 +157,75 @@ TEST(VelodyneUdp, LossAndReorderingAreCountedAndTheStreamGoesOn) {
   EXPECT_EQ(live.decoded_packets, direct.decoded_packets);
   EXPECT_NE(source.summary().find("lost firing sequences"), std::string::npos) << source.summary();
   EXPECT_NE(source.summary().find("skipped packets"), std::string::npos) << source.summary();
+}
+
+// The real VLP-16 capture (dual return, 0.4 s, ../shared/data) sent over loopback at the rate it
+// was recorded at, each datagram at its capture time after the first: the live source gives the
+// scans the decoder makes of the file offline, nothing lost or dropped.
+TEST(VelodyneUdp, RealCaptureAtItsRecordedRateGivesTheOfflineScans) {
+  const char* env = std::getenv("RINGTRACK_TEST_DATA");
+  const std::filesystem::path pcap =
+      (env != nullptr ? std::filesystem::path(env)
+                      : std::filesystem::path(RINGTRACK_SOURCE_DIR) / ".." / "shared" / "data") /
+      "vlp16_indoor_nebula" / "vlp16_dual_4scans.pcap";
+  if (!std::filesystem::exists(pcap)) GTEST_SKIP() << pcap << " is absent";
+  std::vector<std::vector<std::uint8_t>> payloads;
+  std::vector<std::int64_t> stamps;
+  VelodyneDecoder offline;
+  {
+    PcapReader reader(pcap);
+    UdpDatagram d;
+    while (reader.next(d)) {
+      if (d.dst_port != 2368) continue;
+      payloads.emplace_back(d.payload.begin(), d.payload.end());
+      stamps.push_back(d.stamp_ns);
+      offline.add_packet(payloads.back(), d.stamp_ns);
+    }
+  }
+  offline.finish();
+  std::vector<core::OrganizedScan> expected;
+  while (auto s = offline.pop_scan()) expected.push_back(std::move(*s));
+  ASSERT_EQ(expected.size(), 3u);  // as `convert` makes of it
+
+  VelodyneUdpOptions options;
+  options.host = "127.0.0.1";
+  options.port = 0;
+  options.max_queued_scans = 100;
+  VelodyneUdpSource source(options);
+  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
+  ASSERT_GE(fd, 0);
+  sockaddr_in to{};
+  to.sin_family = AF_INET;
+  to.sin_port = htons(source.port());
+  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < payloads.size(); ++i) {
+    std::this_thread::sleep_until(start + std::chrono::nanoseconds(stamps[i] - stamps.front()));
+    ASSERT_EQ(::sendto(fd, payloads[i].data(), payloads[i].size(), 0,
+                       reinterpret_cast<const sockaddr*>(&to), sizeof to),
+              static_cast<ssize_t>(payloads[i].size()));
+  }
+  ::close(fd);
+  const auto sent_for = std::chrono::steady_clock::now() - start;
+  EXPECT_GE(sent_for, std::chrono::nanoseconds(stamps.back() - stamps.front()));
+  for (int i = 0; i < 200 && source.stats().datagrams < payloads.size(); ++i)
+    std::this_thread::sleep_for(10ms);
+  source.stop();
+  EXPECT_EQ(source.stats().datagrams, payloads.size()) << source.summary();
+  EXPECT_EQ(source.stats().dropped_scans, 0u);
+  std::vector<core::OrganizedScan> scans;
+  while (auto s = source.next(0ms)) scans.push_back(std::move(*s));
+  ASSERT_EQ(scans.size(), expected.size()) << source.summary();
+  for (std::size_t s = 0; s < scans.size(); ++s) {
+    EXPECT_EQ(scans[s].statuses(), expected[s].statuses()) << "scan " << s;
+    for (std::size_t i = 0; i < scans[s].size(); ++i) {
+      if (scans[s].valid(i)) {
+        ASSERT_EQ(scans[s].range_m(i), expected[s].range_m(i)) << "scan " << s << ", point " << i;
+      }
+    }
+    EXPECT_EQ(scans[s].column_azimuth_rad, expected[s].column_azimuth_rad) << "scan " << s;
+  }
+  EXPECT_EQ(source.decoder_stats().decoded_packets, offline.stats().decoded_packets);
 }
 
 TEST(VelodyneUdp, ErrorsOfTheReceiverReachTheConsumer) {

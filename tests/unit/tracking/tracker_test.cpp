@@ -359,6 +359,54 @@ TEST(Tracker, WalkingPersonTurnsDynamicSoonAfterLeavingItsBoxByTheMinimumDistanc
   }
 }
 
+// A moving sensor's tracker can slide from a static post or bush onto a neighbour 1-4 m away
+// and stand there: far from the anchor with disjoint footprints, the box test's first two
+// conditions hold in every scan. The streak must also cover dynamic_streak_min_m; without that
+// rule (0) the same script turns dynamic, which shows the script exercises it.
+TEST(Tracker, StaticObjectReacquiredBesideItsAnchorStaysStatic) {
+  for (const double streak_min : {0.5, 0.0}) {
+    core::TrackingConfig config;
+    config.dynamic_test = core::DynamicTest::kBox;
+    config.dynamic_streak_min_m = streak_min;
+    ScriptRunner run(config, 5);
+    std::mt19937_64 noise(5);
+    bool ever_dynamic = false;
+    for (int k = 0; k < 100; ++k) {
+      // stands 1 s, slides 1.8 m in 1.2 s onto the neighbour, then stands there 7.8 s
+      const double x = std::clamp(0.15 * (k - 10), 0.0, 1.8);
+      const auto& hs = run.step({{0, person_detection(at(x, 5.0), noisy(), &noise)}});
+      ASSERT_EQ(hs.size(), 1u);
+      ever_dynamic = ever_dynamic || hs.front().dynamic;
+    }
+    EXPECT_TRUE(run.single_identity(0)) << streak_min;
+    EXPECT_EQ(ever_dynamic, streak_min == 0.0) << streak_min;
+  }
+}
+
+// The rule's cost: a streak short of the distance starts over after 3 x dynamic_confirm_scans,
+// so the box test confirms walkers of dynamic_streak_min_m / (14 scans) = 0.36 m/s and faster
+// (10 Hz, defaults). A slow walker at 0.5 m/s turns dynamic, later than at 1 m/s but within that
+// span of passing the minimum distance.
+TEST(Tracker, SlowWalkerTurnsDynamicWithinTheStreakSpan) {
+  core::TrackingConfig config;
+  config.dynamic_test = core::DynamicTest::kBox;
+  ScriptRunner run(config, 11);
+  std::mt19937_64 noise(11);
+  int moved_at = -1, dynamic_at = -1;
+  for (int k = 0; k < 100; ++k) {
+    const double x = k < 10 ? 0.0 : 0.5 * (k - 10) * kDt;  // stands 1 s, then walks at 0.5 m/s
+    const auto& hs = run.step({{0, person_detection(at(x, 5.0), noisy(), &noise)}});
+    ASSERT_EQ(hs.size(), 1u);
+    if (moved_at < 0 && x > config.dynamic_min_distance_m) moved_at = k;
+    if (dynamic_at < 0 && hs.front().dynamic) dynamic_at = k;
+  }
+  ASSERT_GE(moved_at, 0);
+  ASSERT_GE(dynamic_at, 0);
+  EXPECT_GE(dynamic_at, moved_at + config.dynamic_confirm_scans);
+  EXPECT_LE(dynamic_at, moved_at + 3 * config.dynamic_confirm_scans);
+  EXPECT_TRUE(run.single_identity(0));
+}
+
 TEST(Tracker, DynamicPersonComingToRestIsStaticAgainButStaysEverDynamic) {
   core::TrackingConfig config;
   config.rest_scans_to_static = 30;
@@ -371,11 +419,11 @@ TEST(Tracker, DynamicPersonComingToRestIsStaticAgainButStaysEverDynamic) {
   EXPECT_TRUE(h.ever_dynamic);
   EXPECT_TRUE(run.single_identity(0));
   // Walking off again needs the full confirmation again: the count from the first walk is gone.
-  // At 1 m/s the centre is more than 1 m from the rest position from walk scan 11 on, so the
-  // fifth consecutive moved scan is 15 at the earliest.
-  for (int k = 1; k <= 20; ++k) {
+  // At 1 m/s the centre is more than 1.5 m from the rest position from walk scan 16 on, so the
+  // fifth consecutive moved scan is 20 at the earliest (and the streak has covered 0.5 m at 21).
+  for (int k = 1; k <= 25; ++k) {
     run.step({{0, person_detection(at(3.9 + 1.0 * k * kDt, 0), {})}});
-    if (k <= 14) {
+    if (k <= 19) {
       EXPECT_FALSE(run.tracker.hypotheses().front().dynamic) << "walk scan " << k;
     }
   }
