@@ -25,6 +25,7 @@
 #include "ringtrack/io/output_file.hpp"
 #include "ringtrack/io/pcd.hpp"
 #include "ringtrack/io/ply.hpp"
+#include "ringtrack/io/point_spill.hpp"
 #include "ringtrack/io/poses.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
 #include "ringtrack/io/scan_source.hpp"
@@ -437,9 +438,11 @@ std::string origin_comment(const Eigen::Vector3d& origin) {
 }
 
 // Writes a voxel map's points as binary PLY (x y z intensity), and as PCD beside it when
-// with_pcd, in the local frame with origin (origin_comment); returns how many.
+// with_pcd, in the local frame with origin (origin_comment), after the voxels spilled while the
+// run went on (mapping.map_radius_m; then the PCD is binary, streamed, not compressed);
+// returns how many.
 std::size_t write_map(const fs::path& path, const mapping::StaticMap& map, bool with_pcd,
-                      const Eigen::Vector3d& origin) {
+                      const Eigen::Vector3d& origin, io::PointSpill* spill = nullptr) {
   const auto points = map.points();
   std::vector<Eigen::Vector3f> xyz;
   std::vector<float> intensity;
@@ -450,6 +453,12 @@ std::size_t write_map(const fs::path& path, const mapping::StaticMap& map, bool 
     intensity.push_back(p.intensity);
   }
   const std::string comment = origin_comment(origin);
+  if (spill != nullptr && spill->size() > 0) {
+    const auto spilled = spill->size();
+    spill->write(path, with_pcd ? fs::path(path).replace_extension(".pcd") : fs::path(), xyz,
+                 intensity, comment);
+    return points.size() + spilled;
+  }
   io::write_ply(path, xyz, intensity, io::PlyEncoding::kBinaryLittleEndian, comment);
   if (with_pcd) {
     io::write_pcd_points(fs::path(path).replace_extension(".pcd"), xyz, intensity,
@@ -587,8 +596,12 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
   core::Pose pose;
   std::vector<io::TrackRow> rows;
   std::vector<core::Pose> poses;
+  // The raw map for the pictures has no bound: with mapping.map_radius_m there is none.
+  const bool bounded_map = config.mapping.map_radius_m > 0.0;
   std::optional<mapping::StaticMap> raw_map;
-  if (!o.no_plots) raw_map.emplace(config.mapping.voxel_size_m);
+  if (!o.no_plots && !bounded_map) raw_map.emplace(config.mapping.voxel_size_m);
+  std::unique_ptr<io::PointSpill> spill;
+  if (bounded_map) spill = std::make_unique<io::PointSpill>(out / "static_map.spill");
   // Clusters the altitude test turned away, and detections: "no tracks" is then explained.
   std::uint64_t too_high = 0, detections = 0;
   for (;;) {
@@ -617,6 +630,11 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
       }
       poses.push_back(pose);
       if (raw_map) accumulate_raw(pipeline->dynamic_filter(), *raw_map);
+      if (spill) {
+        for (const auto& v : pipeline->dynamic_filter().evicted()) {
+          spill->append(v.position, v.intensity);
+        }
+      }
       rows.clear();
       for (const auto& h : result.hypotheses) {
         if (!h.reported) continue;  // unconfirmed or lost (docs/tracking.md, "What is reported")
@@ -660,8 +678,9 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
   if (odometry_log) odometry_log->close();
 
   const Eigen::Vector3d origin = pipeline->origin();
+  const std::uint64_t spilled = spill ? spill->size() : 0;
   const std::size_t map_voxels =
-      write_map(out / "static_map.ply", pipeline->static_map(), true, origin);
+      write_map(out / "static_map.ply", pipeline->static_map(), true, origin, spill.get());
   io::write_tum(out / "poses.txt", poses);
   if (mcap) mcap->finish(pipeline->static_map(), scan.stamp_ns);
   bool plotted = false;
@@ -688,7 +707,14 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
   if (odometry_log) print_odometry_summary(*odometry_log);
   std::printf("deskew           %s\n", input.deskew_summary().c_str());
   std::printf("tracks           %zu (%zu ever dynamic)\n", track_ids.size(), dynamic_ids.size());
-  std::printf("static map       %zu voxels\n", map_voxels);
+  if (bounded_map) {
+    std::printf(
+        "static map       %zu voxels (%llu written out during the run, beyond "
+        "mapping.map_radius_m %g m of the sensor; no raw_map.ply or maps.png)\n",
+        map_voxels, static_cast<unsigned long long>(spilled), config.mapping.map_radius_m);
+  } else {
+    std::printf("static map       %zu voxels\n", map_voxels);
+  }
   warn_about_heights(config, too_high, detections);
   if (const std::size_t dropped = pipeline->static_map().dropped_points(); dropped > 0) {
     std::fprintf(stderr,

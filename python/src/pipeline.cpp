@@ -1,11 +1,12 @@
 // Pipeline and what one scan produced (copied out of the pipeline's buffers, so a frame stays
 // valid after the next scan).
 
+#include "ringtrack/pipeline/pipeline.hpp"
+
 #include <string>
 
 #include "bindings.hpp"
 #include "ringtrack/core/error.hpp"
-#include "ringtrack/pipeline/pipeline.hpp"
 
 namespace ringtrack::python {
 namespace {
@@ -61,9 +62,8 @@ Frame snapshot(const pipeline::FrameResult& r, const core::OrganizedScan& scan) 
   }
   for (const tracking::Hypothesis& h : r.hypotheses) {
     f.tracks.push_back({h.id, h.reported_position + o, h.velocity_mps, world(h.box.min),
-                        world(h.box.max),
-                        h.dynamic, h.ever_dynamic, h.person, h.confirmed, h.reported,
-                        h.age_scans, h.missed_scans, h.hits, h.points});
+                        world(h.box.max), h.dynamic, h.ever_dynamic, h.person, h.confirmed,
+                        h.reported, h.age_scans, h.missed_scans, h.hits, h.points});
   }
   f.removed_cells.assign(r.removed_cells.begin(), r.removed_cells.end());
   f.retroactive_points = r.retroactive_points;
@@ -156,6 +156,19 @@ void check_scan_fits(const pipeline::Pipeline& p, const core::OrganizedScan& sca
                          std::to_string(model.rings()) + " x " + std::to_string(model.columns()));
 }
 
+// Voxel means as an (N, 3) float64 array in the world frame (local + origin).
+py::array_t<double> world_points(const std::vector<mapping::MapPoint>& points,
+                                 const Eigen::Vector3d& origin) {
+  py::array_t<double> xyz({static_cast<py::ssize_t>(points.size()), py::ssize_t{3}});
+  auto a = xyz.mutable_unchecked<2>();
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      a(static_cast<py::ssize_t>(i), k) = static_cast<double>(points[i].position[k]) + origin[k];
+    }
+  }
+  return xyz;
+}
+
 }  // namespace
 
 void bind_pipeline(py::module_& m) {
@@ -216,19 +229,18 @@ void bind_pipeline(py::module_& m) {
       .def(
           "static_map",
           [](const pipeline::Pipeline& p) {
-            const std::vector<mapping::MapPoint> pts = p.static_map().points();
-            const Eigen::Vector3d& o = p.origin();
-            py::array_t<double> xyz({static_cast<py::ssize_t>(pts.size()), py::ssize_t{3}});
-            auto a = xyz.mutable_unchecked<2>();
-            for (std::size_t i = 0; i < pts.size(); ++i) {
-              for (int k = 0; k < 3; ++k) {
-                a(static_cast<py::ssize_t>(i), k) = static_cast<double>(pts[i].position[k]) + o[k];
-              }
-            }
-            return xyz;
+            return world_points(p.static_map().points(), p.origin());
           },
           "The static map's voxel means, (N, 3) float64, in the world frame of the poses "
-          "(complete after finish()).");
+          "(complete after finish(); with mapping.map_radius_m, the part still in memory).")
+      .def(
+          "evicted_map",
+          [](const pipeline::Pipeline& p) {
+            return world_points(p.dynamic_filter().evicted(), p.origin());
+          },
+          "The static-map voxels the last process() moved out of memory for lying beyond "
+          "mapping.map_radius_m of the sensor, (N, 3) float64, world frame: take them after "
+          "every call to keep the whole map.");
 }
 
 }  // namespace ringtrack::python

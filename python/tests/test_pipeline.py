@@ -28,6 +28,30 @@ def test_pipeline_tracks_simulated_people():
     assert pipeline.static_map().shape[1] == 3 and pipeline.static_map().shape[0] > 1000
 
 
+def test_bounded_map_hands_over_what_leaves_memory():
+    # mapping.map_radius_m: what the pipeline moves out of memory comes out of evicted_map()
+    # after each scan; with what stays, it covers every voxel of the unbounded map.
+    def run(radius):
+        config = rt.Config()
+        config.set("mapping.log_delay_scans", 5)
+        config.set("mapping.map_radius_m", radius)
+        sim = rt.Simulator("1", seed=3, duration_s=3, moving=True)
+        pipeline = rt.Pipeline(config, sim.model)
+        evicted = []
+        for s in sim:
+            pipeline.process(s["scan"], s["pose"])
+            evicted.append(pipeline.evicted_map())
+        pipeline.finish()
+        return pipeline.static_map(), np.concatenate(evicted)
+
+    everything, none = run(0)
+    kept, left = run(5)
+    assert len(none) == 0 and len(left) > 1000
+    assert len(kept) < len(everything)
+    keys = lambda xyz: set(map(tuple, np.floor(xyz / 0.1).astype(np.int64)))
+    assert keys(everything) <= keys(np.concatenate([kept, left]))
+
+
 def test_pipeline_rejects_a_scan_of_another_sensor():
     pipeline = rt.Pipeline(rt.Config(), rt.SensorModel.by_name("vlp32c"))
     scan = rt.OrganizedScan.from_ranges(

@@ -3,9 +3,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "ringtrack/core/config.hpp"
@@ -37,6 +41,26 @@ std::size_t line_count(const fs::path& p) {
   return n;
 }
 
+// A run's static map: the PCD's points, checked to be the PLY's points in the same order
+// (binary PLY: 16 bytes per point after the header).
+core::UnorganizedCloud map_of_run(const std::string& out) {
+  auto map = io::decode_pcd_cloud(io::read_file_bytes(out + "/static_map.pcd"), "static_map.pcd");
+  const auto ply = io::read_file_bytes(out + "/static_map.ply");
+  const std::string end_header = "end_header\n";
+  const auto body = std::search(ply.begin(), ply.end(), end_header.begin(), end_header.end()) -
+                    ply.begin() + static_cast<std::ptrdiff_t>(end_header.size());
+  EXPECT_EQ(ply.size() - static_cast<std::size_t>(body), 16 * map.size()) << out;
+  if (ply.size() - static_cast<std::size_t>(body) != 16 * map.size()) return {};
+  for (std::size_t i = 0; i < map.size(); ++i) {
+    float v[4];
+    std::memcpy(v, ply.data() + body + static_cast<std::ptrdiff_t>(16 * i), sizeof v);
+    EXPECT_EQ(map.xyz[i], Eigen::Vector3f(v[0], v[1], v[2])) << out << ", point " << i;
+    EXPECT_EQ(map.intensity[i], v[3]) << out << ", point " << i;
+    if (map.xyz[i] != Eigen::Vector3f(v[0], v[1], v[2])) return {};
+  }
+  return map;
+}
+
 class RunCli : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
@@ -64,22 +88,7 @@ TEST_F(RunCli, WritesEveryOutputWithItsSchema) {
       << first_line(out + "/timing.csv");
   EXPECT_EQ(line_count(out + "/timing.csv"), 31u);
   EXPECT_EQ(first_line(out + "/static_map.ply"), "ply");
-  // The PCD map holds the PLY map's points, in the same order (binary PLY: 16 bytes per point
-  // after the header).
-  const auto map =
-      io::decode_pcd_cloud(io::read_file_bytes(out + "/static_map.pcd"), "static_map.pcd");
-  const auto ply = io::read_file_bytes(out + "/static_map.ply");
-  const std::string end_header = "end_header\n";
-  const auto body = std::search(ply.begin(), ply.end(), end_header.begin(), end_header.end()) -
-                    ply.begin() + static_cast<std::ptrdiff_t>(end_header.size());
-  ASSERT_EQ(ply.size() - static_cast<std::size_t>(body), 16 * map.size());
-  ASSERT_GT(map.size(), 100u);
-  for (std::size_t i = 0; i < map.size(); ++i) {
-    float v[4];
-    std::memcpy(v, ply.data() + body + static_cast<std::ptrdiff_t>(16 * i), sizeof v);
-    ASSERT_EQ(map.xyz[i], Eigen::Vector3f(v[0], v[1], v[2])) << i;
-    ASSERT_EQ(map.intensity[i], v[3]) << i;
-  }
+  EXPECT_GT(map_of_run(out).size(), 100u);
   EXPECT_TRUE(fs::exists(out + "/filtered/000029.pcd"));
   std::ifstream config(out + "/config.yaml");
   std::stringstream text;
@@ -276,6 +285,45 @@ TEST_F(RunCli, ASimulatedSequenceGivesItsSensorHeight) {
   // Another key in the file leaves the sequence's height in force.
   std::ofstream(dir_ + "/other.yaml") << "detection:\n  min_height_m: 0.7\n";
   EXPECT_NEAR(height_used(dir_ + "/h4", "--config " + dir_ + "/other.yaml"), 1.2, 1e-9);
+}
+
+// mapping.map_radius_m: voxels farther from the moving sensor leave memory during the run and
+// are written out; the maps hold them and what stayed (PLY and PCD alike, the scratch file
+// gone), every voxel of the unbounded run's map among them.
+TEST_F(RunCli, ABoundedMapWritesOutWhatLeftMemory) {
+  const std::string seq = dir_ + "/flight";
+  ASSERT_EQ(run_command(kCli + " simulate 1 --duration 3 --seed 3 --moving-sensor --out " + seq)
+                .exit_code,
+            0);
+  const std::string common = " --no-plots --quiet --set mapping.log_delay_scans=5 --out ";
+  const auto all = run_command(kCli + " run " + seq + common + dir_ + "/all");
+  ASSERT_EQ(all.exit_code, 0) << all.err;
+  const auto near =
+      run_command(kCli + " run " + seq + common + dir_ + "/near --set mapping.map_radius_m=5");
+  ASSERT_EQ(near.exit_code, 0) << near.err;
+  unsigned long long voxels = 0, spilled = 0;
+  const auto at = near.out.find("static map ");
+  ASSERT_NE(at, std::string::npos) << near.out;
+  ASSERT_EQ(std::sscanf(near.out.c_str() + at, "static map %llu voxels (%llu written out", &voxels,
+                        &spilled),
+            2)
+      << near.out;
+  EXPECT_GT(spilled, 1000u);
+  EXPECT_FALSE(fs::exists(dir_ + "/near/static_map.spill"));
+  EXPECT_FALSE(fs::exists(dir_ + "/near/raw_map.ply"));
+  const auto bounded = map_of_run(dir_ + "/near");
+  const auto unbounded = map_of_run(dir_ + "/all");
+  ASSERT_EQ(bounded.size(), voxels);
+  const auto key = [](const Eigen::Vector3f& p) {
+    return std::array<long, 3>{std::lround(std::floor(p.x() / 0.1f)),
+                               std::lround(std::floor(p.y() / 0.1f)),
+                               std::lround(std::floor(p.z() / 0.1f))};
+  };
+  std::set<std::array<long, 3>> bounded_keys;
+  for (const auto& p : bounded.xyz) bounded_keys.insert(key(p));
+  std::size_t missing = 0;
+  for (const auto& p : unbounded.xyz) missing += bounded_keys.count(key(p)) == 0 ? 1 : 0;
+  EXPECT_EQ(missing, 0u) << "of " << unbounded.size();
 }
 
 }  // namespace

@@ -407,6 +407,12 @@ class Schema {
     integer("free_space_protect_count", m.free_space_protect_count, 1, 1000000,
             "free_space: a point whose static-map voxel already holds this many points is "
             "structure seen occupied many times and stays");
+    number("map_radius_m", m.map_radius_m, 0.0, 1e6,
+           "bounded memory: static-map voxels farther than this (horizontally) from the sensor "
+           "leave memory (a sweep checks every voxel within 10 scans); run writes them into "
+           "static_map.ply/.pcd, a library user takes them from DynamicObjectFilter::evicted(); "
+           "choose it beyond the sensor's range, since a voxel seen again after it left is "
+           "mapped anew (m); 0 = the whole map stays in memory");
 
     auto& b = c.background;
     section_ = "background";

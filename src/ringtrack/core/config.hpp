@@ -153,6 +153,7 @@ struct MappingConfig {
   int free_space_lag_scans{5};         // first test this many scans later; again at release
   double free_space_reach_m{0.8};      // points this near a hypothesis' box are candidates
   int free_space_protect_count{10};    // a map voxel of this many points protects its points
+  double map_radius_m{0.0};  // voxels farther from the sensor (x-y) leave memory (0 = keep all)
 };
 
 /// Background range model of a static sensor (core::BackgroundRangeModel, docs/visibility.md):

@@ -705,17 +705,35 @@ struct PcdFields {
   std::size_t width{0}, height{0};
 };
 
-std::string encode_fields(const PcdFields& f, PcdEncoding encoding) {
-  const std::size_t n = f.xs.size();
-  const bool with_labels = !f.labels.empty();
+std::string fields_header(std::size_t n, std::size_t width, std::size_t height, bool with_labels,
+                          PcdEncoding encoding) {
   std::string out;
   out += "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\n";
   out += with_labels
              ? "FIELDS x y z intensity label\nSIZE 4 4 4 4 4\nTYPE F F F F U\nCOUNT 1 1 1 1 1\n"
              : "FIELDS x y z intensity\nSIZE 4 4 4 4\nTYPE F F F F\nCOUNT 1 1 1 1\n";
-  out += "WIDTH " + std::to_string(f.width) + "\nHEIGHT " + std::to_string(f.height) +
+  out += "WIDTH " + std::to_string(width) + "\nHEIGHT " + std::to_string(height) +
          "\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS " + std::to_string(n) + "\nDATA " +
          std::string(to_string(encoding)) + "\n";
+  return out;
+}
+
+// A one-line comment as the header's second line.
+void insert_comment(std::string& header, std::string_view comment) {
+  if (comment.find_first_of("\r\n") != std::string_view::npos) {
+    throw core::Error("encode_pcd_points: a header comment must be one line");
+  }
+  if (comment.empty()) return;
+  std::string line = "# ";
+  line += comment;
+  line += '\n';
+  header.insert(header.find('\n') + 1, line);
+}
+
+std::string encode_fields(const PcdFields& f, PcdEncoding encoding) {
+  const std::size_t n = f.xs.size();
+  const bool with_labels = !f.labels.empty();
+  std::string out = fields_header(n, f.width, f.height, with_labels, encoding);
   const auto& xs = f.xs;
   const auto& ys = f.ys;
   const auto& zs = f.zs;
@@ -787,6 +805,12 @@ std::string encode_pcd(const core::OrganizedScan& scan, std::span<const std::uin
       encoding);
 }
 
+std::string pcd_points_header(std::size_t n, PcdEncoding encoding, std::string_view comment) {
+  std::string header = fields_header(n, n, 1, false, encoding);
+  insert_comment(header, comment);
+  return header;
+}
+
 std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
                               std::span<const float> intensities, PcdEncoding encoding,
                               std::string_view comment) {
@@ -806,12 +830,7 @@ std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
     if (!intensities.empty()) is[i] = intensities[i];
   }
   std::string out = encode_fields({xs, ys, zs, is, {}, n, 1}, encoding);
-  if (!comment.empty()) {
-    std::string line = "# ";
-    line += comment;
-    line += '\n';
-    out.insert(out.find('\n') + 1, line);
-  }
+  insert_comment(out, comment);
   return out;
 }
 

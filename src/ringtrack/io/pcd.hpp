@@ -99,6 +99,10 @@ void write_pcd(const std::filesystem::path& path, const core::OrganizedScan& sca
                std::span<const std::uint32_t> labels,
                PcdEncoding encoding = PcdEncoding::kBinaryCompressed);
 
+/// The header encode_pcd_points writes for n points (ending with the DATA line); throws
+/// core::Error for a comment of more than one line.
+std::string pcd_points_header(std::size_t n, PcdEncoding encoding, std::string_view comment = {});
+
 /// Encodes an unorganized cloud (WIDTH = points, HEIGHT 1) with fields x y z intensity (F4), e.g.
 /// the static map; intensities empty (all 0) or one per point, else core::Error. A non-empty
 /// comment (one line, e.g. the frame's origin) becomes a "# " line after the first.

@@ -22,14 +22,9 @@ void append_le(std::string& out, float value) {
 
 }  // namespace
 
-std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const float> intensities,
-                       PlyEncoding encoding, std::string_view comment) {
+std::string ply_header(std::size_t n, PlyEncoding encoding, std::string_view comment) {
   if (comment.find_first_of("\r\n") != std::string_view::npos) {
     throw core::Error("encode_ply: a header comment must be one line");
-  }
-  if (!intensities.empty() && intensities.size() != points.size()) {
-    throw core::Error("encode_ply: " + std::to_string(intensities.size()) + " intensities for " +
-                      std::to_string(points.size()) + " points");
   }
   const bool binary = encoding == PlyEncoding::kBinaryLittleEndian;
   std::string out = "ply\n";
@@ -40,9 +35,20 @@ std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const 
     out += comment;
     out += '\n';
   }
-  out += "element vertex " + std::to_string(points.size()) +
+  out += "element vertex " + std::to_string(n) +
          "\nproperty float x\nproperty float y\nproperty float z\nproperty float intensity\n"
          "end_header\n";
+  return out;
+}
+
+std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const float> intensities,
+                       PlyEncoding encoding, std::string_view comment) {
+  if (!intensities.empty() && intensities.size() != points.size()) {
+    throw core::Error("encode_ply: " + std::to_string(intensities.size()) + " intensities for " +
+                      std::to_string(points.size()) + " points");
+  }
+  const bool binary = encoding == PlyEncoding::kBinaryLittleEndian;
+  std::string out = ply_header(points.size(), encoding, comment);
   out.reserve(out.size() + points.size() * (binary ? 16 : 48));
   for (std::size_t i = 0; i < points.size(); ++i) {
     const float intensity = intensities.empty() ? 0.0f : intensities[i];
@@ -66,8 +72,7 @@ std::string encode_ply(std::span<const Eigen::Vector3f> points, std::span<const 
 }
 
 void write_ply(const std::filesystem::path& path, std::span<const Eigen::Vector3f> points,
-               std::span<const float> intensities, PlyEncoding encoding,
-               std::string_view comment) {
+               std::span<const float> intensities, PlyEncoding encoding, std::string_view comment) {
   write_file(path, encode_ply(points, intensities, encoding, comment));
 }
 

@@ -15,6 +15,11 @@ enum class PlyEncoding {
   kAscii,               ///< "format ascii 1.0": one line per point
 };
 
+/// The header encode_ply writes for n points (ending with "end_header\n"); throws core::Error for
+/// a comment of more than one line.
+std::string ply_header(std::size_t n, PlyEncoding encoding = PlyEncoding::kBinaryLittleEndian,
+                       std::string_view comment = {});
+
 /// Encodes points as a PLY file with one vertex element of float properties x y z intensity.
 /// intensities must be empty (all 0) or hold one value per point; throws core::Error otherwise.
 /// A non-empty comment (one line, e.g. the frame's origin) becomes a header comment line.

@@ -65,6 +65,8 @@ struct FilterResult {
   std::size_t free_space_points{0};
   /// Points this scan saw through that stayed: their voxel is structure seen many times.
   std::size_t free_space_protected{0};
+  /// Voxels that left the map for lying beyond mapping.map_radius_m of the sensor (evicted()).
+  std::size_t map_voxels_evicted{0};
 };
 
 /// What the scan itself says, for the free-space line: both may be absent (then only the
@@ -98,6 +100,16 @@ class DynamicObjectFilter {
   [[nodiscard]] const std::deque<LoggedScan>& log() const { return log_; }
   /// Scans that left the log in the last process() or flush() call, e.g. to write them out.
   [[nodiscard]] const std::vector<LoggedScan>& released() const { return released_; }
+  /// With mapping.map_radius_m, a sweep checks every map voxel in at most this many scans, so
+  /// each voxel is checked at least once in any 2 x kSweepScans consecutive scans.
+  static constexpr std::size_t kSweepScans = 10;
+  /// ... and each scan checks at least this many (a small map is swept in one scan).
+  static constexpr std::size_t kMinSweepVisits = 4096;
+
+  /// Map voxels that left memory in the last process() call for lying farther than
+  /// mapping.map_radius_m from the sensor, e.g. to write them out; final (no later removal
+  /// reaches them). Whoever does not take them before the next call drops them.
+  [[nodiscard]] const std::vector<MapPoint>& evicted() const { return evicted_; }
   /// Hypotheses the filter currently keeps history for.
   [[nodiscard]] std::size_t tracked_objects() const { return objects_.size(); }
 
@@ -125,6 +137,9 @@ class DynamicObjectFilter {
   void remove_object_box(LoggedScan& scan, const core::Box3& box);
   [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;
   void release_front();
+  // Moves map voxels farther than mapping.map_radius_m from the sensor at pose to evicted_, a
+  // slice of the map per scan (kSweepScans).
+  void bound_map(const core::Pose& pose);
   // The candidates of the scan just logged: segmented points and points near a hypothesis.
   void mark_candidates(LoggedScan& logged, const core::OrganizedScan& scan,
                        const std::vector<std::uint8_t>* segments,
@@ -139,8 +154,10 @@ class DynamicObjectFilter {
   SettledCells settled_;
   std::deque<LoggedScan> log_;
   std::vector<LoggedScan> released_;
+  std::vector<MapPoint> evicted_;
+  std::size_t sweep_cursor_{0};  // bound_map's sweep: voxels below this are still to check
   std::vector<std::int32_t> point_of_cell_;
-  std::vector<core::Box3> near_boxes_;        // free-space candidates: around these boxes
+  std::vector<core::Box3> near_boxes_;         // free-space candidates: around these boxes
   std::vector<const core::Box3*> near_block_;  // ... those that meet the block at hand
   std::unordered_map<std::uint64_t, ObjectHistory> objects_;
   std::uint64_t next_sequence_{0};

@@ -439,6 +439,30 @@ void StaticMap::erase(std::uint64_t key) {
   ++generation_;
 }
 
+std::size_t StaticMap::remove_outside(const Eigen::Vector2f& center, float radius_m,
+                                      std::vector<MapPoint>& evicted) {
+  std::size_t cursor = size_;
+  return remove_outside(center, radius_m, evicted, cursor, size_);
+}
+
+std::size_t StaticMap::remove_outside(const Eigen::Vector2f& center, float radius_m,
+                                      std::vector<MapPoint>& evicted, std::size_t& cursor,
+                                      std::size_t visits) {
+  const float r2 = radius_m * radius_m;
+  std::size_t removed = 0;
+  cursor = std::min(cursor, size_);
+  // Top down: erase() moves the last voxel into the hole, one above the cursor (visited in this
+  // sweep, or added since), never one still to come.
+  for (; cursor > 0 && visits > 0; --visits) {
+    const Voxel& v = voxel(--cursor);
+    if ((v.point.position.head<2>() - center).squaredNorm() <= r2) continue;
+    evicted.push_back(v.point);
+    erase(v.key);
+    ++removed;
+  }
+  return removed;
+}
+
 std::size_t StaticMap::remove_inside(const core::Box3& box) {
   if (box.empty() || size_ == 0) return 0;
   std::vector<std::uint64_t> doomed;

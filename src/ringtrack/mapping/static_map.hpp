@@ -55,6 +55,18 @@ class StaticMap {
   [[nodiscard]] const MapPoint* voxel_at(const Eigen::Vector3f& p) const;
   /// Removes every voxel whose mean lies inside box; returns how many.
   std::size_t remove_inside(const core::Box3& box);
+  /// Removes every voxel whose mean lies farther than radius_m horizontally (x-y) from center,
+  /// appending each to evicted before it goes; returns how many. One pass over the voxels.
+  std::size_t remove_outside(const Eigen::Vector2f& center, float radius_m,
+                             std::vector<MapPoint>& evicted);
+  /// The same test for at most `visits` voxels of the dense array below `cursor` (clamped to
+  /// size()), from the top down; cursor ends below the last voxel visited. Sweeping the map in
+  /// slices from cursor = size() down to 0 visits every voxel that existed when the sweep began
+  /// and was not moved by a removal meanwhile (removals move the last voxel down; voxels added
+  /// meanwhile are left to the next sweep).
+  std::size_t remove_outside(const Eigen::Vector2f& center, float radius_m,
+                             std::vector<MapPoint>& evicted, std::size_t& cursor,
+                             std::size_t visits);
   /// Removes every voxel.
   void clear();
   /// Completes a pending table resize now (otherwise spread over the next inserts).

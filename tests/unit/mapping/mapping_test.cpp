@@ -454,6 +454,80 @@ TEST(DynamicObjectFilter, MemoryStaysBoundedOnALongStaticRun) {
   EXPECT_EQ(run.filter.map().size(), map_size);
 }
 
+// A sensor driving straight along x at 0.5 m per scan, seeing rings of ground 2-16 m around it.
+core::OrganizedScan ground_rings_scan(int k) {
+  constexpr int kGroundColumns = 360;
+  core::OrganizedScan scan(kRings, kGroundColumns);
+  scan.stamp_ns = testing::scan_stamp_ns(k);
+  for (int r = 0; r < kRings; ++r) {
+    const double d = 2.0 + 2.0 * r;
+    for (int c = 0; c < kGroundColumns; ++c) {
+      const double az = 2.0 * std::numbers::pi * c / kGroundColumns;
+      const Eigen::Vector3f p(static_cast<float>(d * std::cos(az)),
+                              static_cast<float>(d * std::sin(az)), static_cast<float>(kGroundZ));
+      scan.set_return(r, c, p.norm(), static_cast<float>(c % 100), p);
+    }
+  }
+  return scan;
+}
+
+// mapping.map_radius_m bounds the map: no voxel farther than the radius plus the travel of two
+// sweeps (2 x kSweepScans scans: a voxel checked first in one sweep may be checked last in the
+// next) from the sensor stays in memory, the map stops growing, and what left
+// (evicted(), taken after every scan) together with what stayed is exactly the unbounded map: the
+// same voxels with the same means (the sensor never comes back, and a voxel's points all arrive
+// before it is that far behind).
+TEST(DynamicObjectFilter, MapRadiusBoundsTheMapAndHandsOverEveryVoxelThatLeaves) {
+  core::MappingConfig unbounded;
+  unbounded.log_delay_scans = 5;
+  unbounded.free_space = false;
+  core::MappingConfig bounded = unbounded;
+  bounded.map_radius_m = 30.0;
+  DynamicObjectFilter all(unbounded), near(bounded);
+  std::vector<MapPoint> evicted;
+  std::size_t size_at_400 = 0, largest = 0;
+  constexpr int kScans = 1200;  // 600 m
+  for (int k = 0; k < kScans; ++k) {
+    core::Pose pose;
+    pose.stamp_ns = testing::scan_stamp_ns(k);
+    pose.translation = Eigen::Vector3d(0.5 * k, 3.0, 0.0);
+    const core::OrganizedScan scan = ground_rings_scan(k);
+    all.process(scan, pose, {}, {});
+    const auto& r = near.process(scan, pose, {}, {});
+    EXPECT_EQ(r.map_voxels_evicted, near.evicted().size());
+    evicted.insert(evicted.end(), near.evicted().begin(), near.evicted().end());
+    if (k % 20 == 0) {
+      near.map().for_each([&](const MapPoint& p) {
+        ASSERT_LE((p.position.head<2>().cast<double>() - pose.translation.head<2>()).norm(),
+                  bounded.map_radius_m + 0.5 * 2 * DynamicObjectFilter::kSweepScans + 1e-3)
+            << "scan " << k;
+      });
+    }
+    if (k == 400) size_at_400 = near.map().size();
+    largest = std::max(largest, near.map().size());
+  }
+  all.flush();
+  near.flush();
+  EXPECT_TRUE(near.evicted().empty());  // flush moves the log into the map, bounds nothing
+  EXPECT_GT(all.map().size(), 8 * near.map().size());
+  EXPECT_LE(largest, size_at_400 + size_at_400 / 10);
+  std::vector<MapPoint> together = near.map().points();
+  together.insert(together.end(), evicted.begin(), evicted.end());
+  std::vector<MapPoint> expected = all.map().points();
+  const auto by_value = [](const MapPoint& p, const MapPoint& q) {
+    return std::tie(p.position.x(), p.position.y(), p.position.z(), p.intensity, p.count) <
+           std::tie(q.position.x(), q.position.y(), q.position.z(), q.intensity, q.count);
+  };
+  std::sort(together.begin(), together.end(), by_value);
+  std::sort(expected.begin(), expected.end(), by_value);
+  ASSERT_EQ(together.size(), expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    ASSERT_EQ(together[i].position, expected[i].position) << i;
+    ASSERT_EQ(together[i].intensity, expected[i].intensity) << i;
+    ASSERT_EQ(together[i].count, expected[i].count) << i;
+  }
+}
+
 TEST(DynamicObjectFilter, RejectsHypothesesNamingMissingDetections) {
   DynamicObjectFilter filter{core::MappingConfig{}};
   const Frame f = render({}, sensor_pose(0));

@@ -1,15 +1,18 @@
 // StaticMap's incremental table growth against a naive reference: a std::map from voxel index
 // to the same running mean. Inserts (single and batched), removals with small boxes (voxel
-// lookups) and huge boxes (table scans) are checked before, during and after every resize, in
-// both resize phases (the doubled table being prepared; the old table draining into it).
+// lookups), huge boxes (table scans) and discs (remove_outside) are checked before, during and
+// after every resize, in both resize phases (the doubled table being prepared; the old table
+// draining into it).
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <map>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include "ringtrack/mapping/static_map.hpp"
@@ -48,6 +51,21 @@ class NaiveMap {
     return n;
   }
 
+  std::size_t remove_outside(const Eigen::Vector2f& center, float radius,
+                             std::vector<MapPoint>& evicted) {
+    std::size_t n = 0;
+    for (auto it = voxels_.begin(); it != voxels_.end();) {
+      if ((it->second.position.head<2>() - center).norm() > radius) {
+        evicted.push_back(it->second);
+        it = voxels_.erase(it);
+        ++n;
+      } else {
+        ++it;
+      }
+    }
+    return n;
+  }
+
   [[nodiscard]] std::size_t size() const { return voxels_.size(); }
   // Ordered by voxel index, as StaticMap::points().
   [[nodiscard]] std::vector<MapPoint> points() const {
@@ -60,6 +78,22 @@ class NaiveMap {
   float inverse_;
   std::map<std::array<std::int64_t, 3>, MapPoint> voxels_;
 };
+
+// The same voxels, whatever their order.
+void expect_same_points(std::vector<MapPoint> a, std::vector<MapPoint> b, const char* where) {
+  const auto by_value = [](const MapPoint& p, const MapPoint& q) {
+    return std::tie(p.position.x(), p.position.y(), p.position.z(), p.intensity, p.count) <
+           std::tie(q.position.x(), q.position.y(), q.position.z(), q.intensity, q.count);
+  };
+  std::sort(a.begin(), a.end(), by_value);
+  std::sort(b.begin(), b.end(), by_value);
+  ASSERT_EQ(a.size(), b.size()) << where;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].position, b[i].position) << where << ", voxel " << i;
+    ASSERT_EQ(a[i].intensity, b[i].intensity) << where << ", voxel " << i;
+    ASSERT_EQ(a[i].count, b[i].count) << where << ", voxel " << i;
+  }
+}
 
 void expect_same(const StaticMap& map, const NaiveMap& reference, const char* where) {
   ASSERT_EQ(map.size(), reference.size()) << where;
@@ -106,6 +140,7 @@ TEST(StaticMapResize, MatchesANaiveMapThroughManyResizes) {
   PhaseLog log;
   log.observe(map);
   int removals_while_resizing = 0;
+  int evictions = 0;  // remove_outside calls that removed something
   for (int batch = 0; batch < 300; ++batch) {
     std::vector<Eigen::Vector3f> points;
     std::vector<float> intensities;
@@ -148,6 +183,16 @@ TEST(StaticMapResize, MatchesANaiveMapThroughManyResizes) {
       if (map.resizing()) ++removals_while_resizing;
       EXPECT_EQ(map.remove_inside(box), reference.remove_inside(box)) << "batch " << batch;
     }
+    if (batch % 7 == 3) {
+      // Bounded memory (mapping.map_radius_m): the corners beyond a disc leave, handed over.
+      const Eigen::Vector2f c(xy(rng) * 0.1f, xy(rng) * 0.1f);
+      if (map.resizing()) ++removals_while_resizing;
+      std::vector<MapPoint> evicted, expected;
+      EXPECT_EQ(map.remove_outside(c, 20.0f, evicted), reference.remove_outside(c, 20.0f, expected))
+          << "batch " << batch;
+      expect_same_points(evicted, expected, "evicted");
+      if (!expected.empty()) ++evictions;
+    }
     if (batch % 10 == 0 || map.resizing()) expect_same(map, reference, "during the run");
     if (HasFatalFailure()) return;
   }
@@ -161,6 +206,7 @@ TEST(StaticMapResize, MatchesANaiveMapThroughManyResizes) {
   EXPECT_GT(log.preparing, 0);
   EXPECT_GT(log.draining, 0);
   EXPECT_GT(removals_while_resizing, 0);
+  EXPECT_GT(evictions, 10);
 }
 
 TEST(StaticMapResize, VoxelsRemovedFromTheDrainingTableStayRemoved) {
