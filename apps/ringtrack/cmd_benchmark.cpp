@@ -33,6 +33,7 @@
 #include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/scenario_file.hpp"
 #include "ringtrack/version.hpp"
+#include "stop_signals.hpp"
 
 namespace ringtrack::cli {
 namespace {
@@ -308,6 +309,8 @@ void run_benchmark(const BenchmarkOptions& o) {
   if (ec) throw core::InputError(o.out + ": cannot create the output folder: " + ec.message());
   // run.json says whether the folder's outputs are whole (docs/formats.md).
   io::RunStatusFile status_file(out / "run.json", new_run_status("benchmark", ""));
+  // Ctrl-C and SIGTERM stop after the scan at hand and report the runs that finished.
+  const StopSignals stop_signals;
   status_file.start();
   try {
     benchmark_into(o, config, runs, status_file.status());
@@ -315,7 +318,7 @@ void run_benchmark(const BenchmarkOptions& o) {
     status_file.fail(e.what());
     throw;
   }
-  status_file.finish();
+  status_file.finish(StopSignals::signal_name());
 }
 
 void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
@@ -329,12 +332,14 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   case_options.deskew = !o.no_deskew;
   case_options.evaluation.moving_radius_m = o.moving_radius_m;
   case_options.person_figures = o.person_figures;
+  case_options.interrupt = &StopSignals::stop_flag();
   const auto start = std::chrono::steady_clock::now();
   std::vector<BenchmarkCase> cases;
   io::OutputFile timing(out / "timing.csv");
   timing.write(
       "case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n");
   for (const experiment::PlannedRun& run : runs) {
+    if (StopSignals::requested()) break;
     const sim::Scenario& s = run.scenario;
     const bool moving = run.moving();
     if (!o.quiet && !o.json) {
@@ -360,6 +365,15 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
       };
     }
     BenchmarkCase c = experiment::run_benchmark_case(s, config, case_options);
+    if (c.interrupted) {
+      // A run cut short has no figures to report: the outputs cover the finished runs only.
+      if (tracks_csv) {
+        tracks_csv->discard();
+        objects_csv->discard();
+      }
+      if (!o.quiet && !o.json) std::cerr << " stopped by " << StopSignals::signal_name() << "\n";
+      break;
+    }
     c.validation = run.validation;
     status.scans_read += static_cast<std::uint64_t>(c.scans);
     status.scans_processed += static_cast<std::uint64_t>(c.scans);
@@ -386,6 +400,11 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
     cases.push_back(std::move(c));
   }
   timing.close();
+  if (cases.empty()) {
+    throw core::InputError("benchmark stopped by " + StopSignals::signal_name() +
+                           " before its first run finished: nothing to report");
+  }
+  const std::string stopped_by = StopSignals::signal_name();
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -393,8 +412,14 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   const std::vector<Aggregate> groups = experiment::group_cases(cases);
 
   const bool plotted = !o.no_plot && plot_stage_times(out / "timing.csv", out / "stage_times.png");
-  io::write_file(out / "report.md",
-                 report_markdown(o, cases, groups, wall_s, config_text, plotted));
+  std::string report = report_markdown(o, cases, groups, wall_s, config_text, plotted);
+  if (!stopped_by.empty()) {
+    report.insert(report.find("\n\n") + 2,
+                  "**Interrupted by " + stopped_by + " after " + std::to_string(cases.size()) +
+                      " of " + std::to_string(runs.size()) +
+                      " runs: every figure below covers the finished runs only.**\n\n");
+  }
+  io::write_file(out / "report.md", report);
 
   nlohmann::ordered_json j;
   j["ringtrack"] = kVersion;
@@ -406,6 +431,10 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   j["threshold_m"] = case_options.evaluation.threshold_m;
   j["moving_radius_m"] = case_options.evaluation.moving_radius_m;
   j["wall_s"] = wall_s;
+  // Interrupted (Ctrl-C, SIGTERM): the cases and groups cover the runs that finished.
+  j["runs_planned"] = runs.size();
+  j["interrupted"] =
+      stopped_by.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(stopped_by);
   j["cases"] = nlohmann::ordered_json::array();
   for (const BenchmarkCase& c : cases) j["cases"].push_back(experiment::case_json(c));
   for (const Aggregate& g : groups) {
@@ -425,7 +454,12 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
     std::cout << j.dump(2) << "\n";
     return;
   }
-  std::cout << "benchmark of " << cases.size() << " runs in " << fixed(wall_s, 1) << " s\n";
+  std::cout << "benchmark of " << cases.size() << " runs in " << fixed(wall_s, 1) << " s";
+  if (!stopped_by.empty()) {
+    std::cout << " (interrupted by " << stopped_by << " after " << cases.size() << " of "
+              << runs.size() << " runs: the figures cover these runs only)";
+  }
+  std::cout << "\n";
   for (const Aggregate& g : groups) {
     std::cout << "  " << g.label << ": MOTA " << fixed(g.mot.mota(), 3) << ", MOTP "
               << fixed(g.mot.motp(), 3) << " m (x-y " << fixed(g.mot.horizontal_motp(), 3)

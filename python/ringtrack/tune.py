@@ -20,7 +20,18 @@ from . import tuning
 from .tuning import TuneError
 
 EXIT_BAD_INPUT = 2
-EXIT_INTERRUPTED = 130
+EXIT_INTERRUPTED = 128  # + the signal: 130 for Ctrl-C (SIGINT), 143 for SIGTERM
+# The signal that stopped the tuner; SIGTERM (kill, docker stop, systemd) is handled as Ctrl-C.
+_stopped_by = [signal.SIGINT]
+
+
+def _interrupt(signum, _frame):
+    _stopped_by[0] = signum
+    raise KeyboardInterrupt
+
+
+def interrupted_status():
+    return EXIT_INTERRUPTED + _stopped_by[0]
 
 
 def parse_args(argv):
@@ -392,6 +403,7 @@ def report_only(args, out, storage, base_yaml, space):
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
+    signal.signal(signal.SIGTERM, _interrupt)
     try:
         import optuna  # noqa: F401
     except ImportError:
@@ -453,16 +465,16 @@ def run(args, argv):
         try:
             optimise(args, storage, folds, space, base_yaml, objectives, worker_index)
         except KeyboardInterrupt:
-            return EXIT_INTERRUPTED
+            return interrupted_status()
         return 0
     try:
         optimise(args, storage, folds, space, base_yaml, objectives, worker_index)
         reap(args, storage, children)
     except KeyboardInterrupt:
         stop_workers(children)
-        print("ringtrack tune: interrupted; run the same command again to resume the study",
-              file=sys.stderr)
-        return EXIT_INTERRUPTED
+        print(f"ringtrack tune: interrupted by {signal.Signals(_stopped_by[0]).name}; run the "
+              "same command again to resume the study", file=sys.stderr)
+        return interrupted_status()
     write_outputs(args, out, storage, folds, base_yaml, space)
     log(args, f"done in {(time.monotonic() - start) / 60:.1f} min: {out}/report.md, "
         f"trials.csv{', loocv.png' if args.loocv else ', best.yaml'}")

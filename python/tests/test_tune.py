@@ -162,7 +162,9 @@ def test_local_workers_share_one_study(tmp_path):
     assert len({r["worker"] for r in rows}) == 2  # both processes did trials
 
 
-def test_interrupt_then_resume(tmp_path):
+@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+def test_interrupt_then_resume(tmp_path, stop):
+    # Ctrl-C and SIGTERM (kill, docker stop) alike: workers stopped, exit 128 + signal, resumable.
     out = tmp_path / "interrupted"
     proc = subprocess.Popen([CLI, "tune", "--trials", "400", "--out", str(out), *SMALL],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -170,9 +172,9 @@ def test_interrupt_then_resume(tmp_path):
     deadline = time.time() + 60
     while time.time() < deadline and (not journal.exists() or journal.stat().st_size < 4000):
         time.sleep(0.2)
-    proc.send_signal(signal.SIGINT)
+    proc.send_signal(stop)
     _, err = proc.communicate(timeout=60)
-    assert proc.returncode == 130 and "resume" in err
+    assert proc.returncode == 128 + stop and "resume" in err and stop.name in err
     tune("--trials", 3, "--out", out, *SMALL)  # resumes; the budget is already met or near
     rows = trials(out / "trials.csv")
     assert not any(r["state"] == "RUNNING" for r in rows)

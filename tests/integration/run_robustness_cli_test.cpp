@@ -531,6 +531,53 @@ TEST(SimulateStopSignal, SigtermEndsWithACompleteShorterSequence) {
   fs::remove_all(dir);
 }
 
+// benchmark honours SIGTERM like run: the run at hand is dropped (its tables deleted), the
+// finished runs are reported, and run.json, results.json and report.md say it was interrupted.
+TEST(BenchmarkStopSignal, SigtermReportsTheFinishedRunsOnly) {
+  const std::string dir = testing::make_temp_dir("ringtrack-robust-benchmark-signal-");
+  const fs::path out = fs::path(dir) / "bench";
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    const int sink = ::open("/dev/null", O_WRONLY);
+    ::dup2(sink, 1);
+    ::dup2(sink, 2);
+    ::execl(kCli.c_str(), "ringtrack", "benchmark", "--scenarios", "1", "--sensors", "both",
+            "--duration", "60", "--save-tracks", "--no-plot", "--out", out.c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  // The second run's table appears when the first run has finished.
+  for (int i = 0; i < 6000; ++i) {
+    std::error_code ec;
+    if (fs::exists(out / "tracks-1-moving.csv", ec)) break;
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_TRUE(fs::exists(out / "tracks-1-moving.csv")) << "the first run never finished";
+  ::kill(pid, SIGTERM);
+  int status = 0;
+  if (!testing::wait_or_kill(pid, status)) {
+    FAIL() << "benchmark did not stop on SIGTERM";
+  }
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  const auto j = run_json(out);
+  EXPECT_EQ(j["complete"], true);
+  EXPECT_EQ(j["interrupted"], "SIGTERM");
+  const auto results = nlohmann::json::parse(text_of(out / "results.json"));
+  EXPECT_EQ(results["interrupted"], "SIGTERM");
+  EXPECT_EQ(results["runs_planned"], 2);
+  ASSERT_EQ(results["cases"].size(), 1u);
+  EXPECT_EQ(results["cases"][0]["sensor"], "static");
+  EXPECT_EQ(results["cases"][0]["scans"], 600);
+  EXPECT_TRUE(fs::exists(out / "tracks-1-static.csv"));
+  EXPECT_FALSE(fs::exists(out / "tracks-1-moving.csv"));
+  EXPECT_FALSE(fs::exists(out / "objects-1-moving.csv"));
+  EXPECT_NE(text_of(out / "report.md").find("Interrupted by SIGTERM after 1 of 2 runs"),
+            std::string::npos);
+  fs::remove_all(dir);
+}
+
 // Every option `convert` takes to read and decode an input, `run` takes too (one shared set):
 // a capture on port 2369 converts and runs alike.
 TEST(RunRobustnessCli, RunTakesEveryDecoderOptionConvertTakes) {

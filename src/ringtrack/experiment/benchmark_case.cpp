@@ -121,6 +121,10 @@ BenchmarkCase run_case(const sim::Scenario& scenario, const core::SensorModel& m
   sim::SimulatedScan scan;
   core::Pose pose;
   for (std::int64_t k = 0; k < scans; ++k) {
+    if (options.interrupt != nullptr && options.interrupt->load()) {
+      out.interrupted = true;
+      return out;
+    }
     const auto t0 = Clock::now();
     feed(k, scan, pose);
     const auto t1 = Clock::now();

@@ -4,6 +4,7 @@
 /// stage. No files are read or written here; `ringtrack benchmark`, `ringtrack tune` and the
 /// Python package share it.
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <optional>
@@ -47,6 +48,9 @@ struct BenchmarkCaseOptions {
   /// Called after every scan with the simulated scan (deskewed) and the pipeline's result,
   /// e.g. to write tracks.csv and objects.csv; may be empty.
   std::function<void(const sim::SimulatedScan&, const pipeline::FrameResult&)> on_scan;
+  /// When given and set (e.g. by Ctrl-C or SIGTERM), a run over scans stops before its next scan
+  /// and returns with BenchmarkCase::interrupted and no evaluation.
+  const std::atomic<bool>* interrupt{nullptr};
 };
 
 /// Results of one scenario with one sensor motion.
@@ -62,6 +66,8 @@ struct BenchmarkCase {
   StageSeries times;
   double simulate_s{0};  ///< wall time producing scans (simulation or expanding a recording)
   double pipeline_s{0};  ///< wall time in the pipeline (process + finish)
+  /// Stopped by BenchmarkCaseOptions::interrupt: the figures are not evaluated (discard it).
+  bool interrupted{false};
 };
 
 /// Simulates the simulator's next scan into `scan` and returns the pose to give the pipeline:

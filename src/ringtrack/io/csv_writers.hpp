@@ -82,6 +82,8 @@ class TracksCsvWriter {
   void write(std::span<const TrackRow> rows);
   /// Flushes and closes; the file is complete only when this returns without throwing.
   void close() { file_.close(); }
+  /// Closes and deletes the file (a partial table must not look complete).
+  void discard() noexcept { file_.discard(); }
 
  private:
   OutputFile file_;
@@ -98,6 +100,8 @@ class ObjectsCsvWriter {
   void write(std::span<const ObjectRow> rows);
   /// Flushes and closes; the file is complete only when this returns without throwing.
   void close() { file_.close(); }
+  /// Closes and deletes the file (a partial table must not look complete).
+  void discard() noexcept { file_.discard(); }
 
  private:
   OutputFile file_;

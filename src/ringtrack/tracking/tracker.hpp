@@ -43,14 +43,14 @@ struct Hypothesis {
   int missed_scans{0};       ///< consecutive scans without an assigned detection
   int rest_scans{0};         ///< consecutive scans with reported speed zero
   int moved_scans{0};        ///< consecutive measured scans the dynamic test held in
-  Eigen::Vector3d streak_start{
-      Eigen::Vector3d::Zero()};  ///< measured centroid when the moved_scans streak began (world)
-  int hits{0};                   ///< scans with an assigned detection, the creating one included
-  bool confirmed{false};  ///< had confirm_hits detections: no longer a possible one-scan blip
-  bool reported{false};   ///< confirmed and recently measured (or hidden): what outputs list
-  int person_scans{0};    ///< scans with a strict (person-shaped, not relaxed) detection
-  bool person{false};     ///< confirmed and person-shaped in person_min_scans scans; stays set
-                          ///< (moving or not, see docs/tracking.md "Standing people")
+  int hits{0};               ///< scans with an assigned detection, the creating one included
+  bool confirmed{false};     ///< had confirm_hits detections: no longer a possible one-scan blip
+  bool reported{false};      ///< confirmed and recently measured (or hidden): what outputs list
+  int person_scans{0};       ///< scans with a strict (person-shaped, not relaxed) detection
+  bool person{false};        ///< confirmed and person-shaped in person_min_scans scans; stays set
+                             ///< (moving or not, see docs/tracking.md "Standing people")
+  /// Measured centroid (world) in the first scan of the current moved_scans streak.
+  Eigen::Vector3d streak_start{Eigen::Vector3d::Zero()};
   std::vector<Eigen::Vector3f> anchor_points;  ///< sample of the anchor detection's world points
   std::vector<Eigen::Vector3f> last_points;    ///< sample of the last detection's world points
   Eigen::Vector3d anchor_viewpoint{Eigen::Vector3d::Zero()};  ///< sensor position when anchored
