@@ -159,10 +159,17 @@ TEST(VelodyneUdp, LossAndReorderingAreCountedAndTheStreamGoesOn) {
   EXPECT_NE(source.summary().find("skipped packets"), std::string::npos) << source.summary();
 }
 
-// The real VLP-16 capture (dual return, 0.4 s, ../shared/data) sent over loopback at the rate it
-// was recorded at, each datagram at its capture time after the first: the live source gives the
-// scans the decoder makes of the file offline, nothing lost or dropped.
-TEST(VelodyneUdp, RealCaptureAtItsRecordedRateGivesTheOfflineScans) {
+// The real VLP-16 capture (dual return, 0.4 s, ../shared/data) sent over loopback three ways: at
+// the rate it was recorded at (each datagram at its capture time after the first), as fast as
+// the receive buffer allows (a 2 ms pause per 20 datagrams: 13 times the sensor's rate), and that
+// fast over a lossy, reordering network (every tenth datagram lost, every 25th pair swapped). The
+// live source gives exactly the scans the decoder makes of the same datagrams offline, nothing
+// dropped, with the loss and the reordering counted.
+enum class Pacing { kRecorded, kFast, kLossyFast };
+
+class VelodyneUdpRealCapture : public ::testing::TestWithParam<Pacing> {};
+
+TEST_P(VelodyneUdpRealCapture, GivesTheOfflineScansOfTheSameDatagrams) {
   const char* env = std::getenv("RINGTRACK_TEST_DATA");
   const std::filesystem::path pcap =
       (env != nullptr ? std::filesystem::path(env)
@@ -171,21 +178,36 @@ TEST(VelodyneUdp, RealCaptureAtItsRecordedRateGivesTheOfflineScans) {
   if (!std::filesystem::exists(pcap)) GTEST_SKIP() << pcap << " is absent";
   std::vector<std::vector<std::uint8_t>> payloads;
   std::vector<std::int64_t> stamps;
-  VelodyneDecoder offline;
   {
     PcapReader reader(pcap);
     UdpDatagram d;
     while (reader.next(d)) {
       if (d.dst_port != 2368) continue;
+      if (GetParam() == Pacing::kLossyFast && stamps.size() % 10 == 9) {
+        stamps.push_back(d.stamp_ns);  // lost: keeps the count, not sent
+        payloads.emplace_back();
+        continue;
+      }
       payloads.emplace_back(d.payload.begin(), d.payload.end());
       stamps.push_back(d.stamp_ns);
-      offline.add_packet(payloads.back(), d.stamp_ns);
     }
   }
+  for (std::size_t i = payloads.size(); i-- > 0;) {
+    if (payloads[i].empty()) {
+      payloads.erase(payloads.begin() + static_cast<std::ptrdiff_t>(i));
+      stamps.erase(stamps.begin() + static_cast<std::ptrdiff_t>(i));
+    }
+  }
+  if (GetParam() == Pacing::kLossyFast) {
+    for (std::size_t i = 20; i + 1 < payloads.size(); i += 25)
+      std::swap(payloads[i], payloads[i + 1]);
+  }
+  VelodyneDecoder offline;
+  for (std::size_t i = 0; i < payloads.size(); ++i) offline.add_packet(payloads[i], stamps[i]);
   offline.finish();
   std::vector<core::OrganizedScan> expected;
   while (auto s = offline.pop_scan()) expected.push_back(std::move(*s));
-  ASSERT_EQ(expected.size(), 3u);  // as `convert` makes of it
+  ASSERT_EQ(expected.size(), 3u);  // as `convert` makes of the file
 
   VelodyneUdpOptions options;
   options.host = "127.0.0.1";
@@ -200,14 +222,20 @@ TEST(VelodyneUdp, RealCaptureAtItsRecordedRateGivesTheOfflineScans) {
   to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < payloads.size(); ++i) {
-    std::this_thread::sleep_until(start + std::chrono::nanoseconds(stamps[i] - stamps.front()));
+    if (GetParam() == Pacing::kRecorded) {
+      std::this_thread::sleep_until(start + std::chrono::nanoseconds(stamps[i] - stamps.front()));
+    } else if (i % 20 == 19) {
+      std::this_thread::sleep_for(2ms);
+    }
     ASSERT_EQ(::sendto(fd, payloads[i].data(), payloads[i].size(), 0,
                        reinterpret_cast<const sockaddr*>(&to), sizeof to),
               static_cast<ssize_t>(payloads[i].size()));
   }
   ::close(fd);
-  const auto sent_for = std::chrono::steady_clock::now() - start;
-  EXPECT_GE(sent_for, std::chrono::nanoseconds(stamps.back() - stamps.front()));
+  if (GetParam() == Pacing::kRecorded) {
+    EXPECT_GE(std::chrono::steady_clock::now() - start,
+              std::chrono::nanoseconds(stamps.back() - stamps.front()));
+  }
   for (int i = 0; i < 200 && source.stats().datagrams < payloads.size(); ++i)
     std::this_thread::sleep_for(10ms);
   source.stop();
@@ -225,8 +253,29 @@ TEST(VelodyneUdp, RealCaptureAtItsRecordedRateGivesTheOfflineScans) {
     }
     EXPECT_EQ(scans[s].column_azimuth_rad, expected[s].column_azimuth_rad) << "scan " << s;
   }
-  EXPECT_EQ(source.decoder_stats().decoded_packets, offline.stats().decoded_packets);
+  const auto live = source.decoder_stats();
+  EXPECT_EQ(live.decoded_packets, offline.stats().decoded_packets);
+  EXPECT_EQ(live.lost_sequences, offline.stats().lost_sequences);
+  EXPECT_EQ(live.out_of_order, offline.stats().out_of_order);
+  if (GetParam() == Pacing::kLossyFast) {
+    EXPECT_GT(live.lost_sequences, 0u);
+    EXPECT_GT(live.out_of_order, 0u);
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(Pacings, VelodyneUdpRealCapture,
+                         ::testing::Values(Pacing::kRecorded, Pacing::kFast, Pacing::kLossyFast),
+                         [](const ::testing::TestParamInfo<Pacing>& param_info) {
+                           switch (param_info.param) {
+                             case Pacing::kRecorded:
+                               return std::string("RecordedRate");
+                             case Pacing::kFast:
+                               return std::string("AsFastAsTheBufferAllows");
+                             case Pacing::kLossyFast:
+                               return std::string("LossyAndReordered");
+                           }
+                           return std::string();
+                         });
 
 TEST(VelodyneUdp, ErrorsOfTheReceiverReachTheConsumer) {
   VelodyneUdpOptions options;
