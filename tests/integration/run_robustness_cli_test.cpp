@@ -382,6 +382,36 @@ struct Stopped {
   std::string out;
 };
 
+// Starts `ringtrack args...` in the background with its standard output and error going to the
+// given files (created or truncated); the child's pid, or -1.
+pid_t start_cli(std::vector<std::string> args, const std::string& out_path = "/dev/null",
+                const std::string& err_path = "/dev/null") {
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int so = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(err, 2);
+    ::dup2(so, 1);
+    args.insert(args.begin(), "ringtrack");
+    std::vector<char*> argv;
+    for (auto& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    ::execv(kCli.c_str(), argv.data());
+    ::_exit(127);
+  }
+  return pid;
+}
+
+// Waits until path exists, at most `polls` times 10 ms; whether it does.
+bool wait_for_file(const fs::path& path, int polls) {
+  for (int i = 0; i < polls; ++i) {
+    std::error_code ec;
+    if (fs::exists(path, ec)) return true;
+    std::this_thread::sleep_for(10ms);
+  }
+  return false;
+}
+
 // Starts `ringtrack <command> udp://127.0.0.1:PORT --out OUT <extra>`, sends it about six
 // revolutions of VLP-16 packets, waits for it to take them and sends `signal`.
 Stopped stop_live_command(const std::string& command, const std::string& out,
@@ -389,21 +419,9 @@ Stopped stop_live_command(const std::string& command, const std::string& out,
   const std::uint16_t port = free_udp_port();
   const std::string err_path = out + ".stderr";
   const std::string out_path = out + ".stdout";
-  const pid_t pid = ::fork();
-  if (pid == 0) {
-    const int err = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int so = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(err, 2);
-    ::dup2(so, 1);
-    const std::string url = "udp://127.0.0.1:" + std::to_string(port);
-    std::vector<std::string> args{"ringtrack", command, url, "--out", out};
-    args.insert(args.end(), extra.begin(), extra.end());
-    std::vector<char*> argv;
-    for (auto& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    ::execv(kCli.c_str(), argv.data());
-    ::_exit(127);
-  }
+  std::vector<std::string> args{command, "udp://127.0.0.1:" + std::to_string(port), "--out", out};
+  args.insert(args.end(), extra.begin(), extra.end());
+  const pid_t pid = start_cli(args, out_path, err_path);
   Stopped result;
   if (pid < 0) return result;
   bool bound = false;
@@ -499,21 +517,10 @@ TEST(ConvertStopSignal, SigtermEndsTheRecordingWithACompleteSequence) {
 TEST(SimulateStopSignal, SigtermEndsWithACompleteShorterSequence) {
   const std::string dir = testing::make_temp_dir("ringtrack-robust-simulate-signal-");
   const std::string out = dir + "/seq";
-  const pid_t pid = ::fork();
+  const pid_t pid = start_cli({"simulate", "1", "--duration", "3600", "--out", out});
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    const int sink = ::open("/dev/null", O_WRONLY);
-    ::dup2(sink, 1);
-    ::execl(kCli.c_str(), "ringtrack", "simulate", "1", "--duration", "3600", "--out", out.c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   // Wait until the simulator has written a few scans, then stop it.
-  for (int i = 0; i < 500; ++i) {
-    std::error_code ec;
-    if (fs::exists(fs::path(out) / "scans" / io::scan_file_name(3), ec)) break;
-    std::this_thread::sleep_for(10ms);
-  }
+  wait_for_file(fs::path(out) / "scans" / io::scan_file_name(3), 500);
   ::kill(pid, SIGTERM);
   int status = 0;
   if (!testing::wait_or_kill(pid, status)) {
@@ -536,24 +543,11 @@ TEST(SimulateStopSignal, SigtermEndsWithACompleteShorterSequence) {
 TEST(BenchmarkStopSignal, SigtermReportsTheFinishedRunsOnly) {
   const std::string dir = testing::make_temp_dir("ringtrack-robust-benchmark-signal-");
   const fs::path out = fs::path(dir) / "bench";
-  const pid_t pid = ::fork();
+  const pid_t pid = start_cli({"benchmark", "--scenarios", "1", "--sensors", "both", "--duration",
+                               "60", "--save-tracks", "--no-plot", "--out", out.string()});
   ASSERT_GE(pid, 0);
-  if (pid == 0) {
-    const int sink = ::open("/dev/null", O_WRONLY);
-    ::dup2(sink, 1);
-    ::dup2(sink, 2);
-    ::execl(kCli.c_str(), "ringtrack", "benchmark", "--scenarios", "1", "--sensors", "both",
-            "--duration", "60", "--save-tracks", "--no-plot", "--out", out.c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
   // The second run's table appears when the first run has finished.
-  for (int i = 0; i < 6000; ++i) {
-    std::error_code ec;
-    if (fs::exists(out / "tracks-1-moving.csv", ec)) break;
-    std::this_thread::sleep_for(10ms);
-  }
-  ASSERT_TRUE(fs::exists(out / "tracks-1-moving.csv")) << "the first run never finished";
+  ASSERT_TRUE(wait_for_file(out / "tracks-1-moving.csv", 6000)) << "the first run never finished";
   ::kill(pid, SIGTERM);
   int status = 0;
   if (!testing::wait_or_kill(pid, status)) {

@@ -718,11 +718,15 @@ std::string fields_header(std::size_t n, std::size_t width, std::size_t height, 
   return out;
 }
 
-// A one-line comment as the header's second line.
-void insert_comment(std::string& header, std::string_view comment) {
+// A header comment must stay on its line.
+void check_comment(std::string_view comment) {
   if (comment.find_first_of("\r\n") != std::string_view::npos) {
     throw core::Error("encode_pcd_points: a header comment must be one line");
   }
+}
+
+// A one-line comment (check_comment) as the header's second line.
+void insert_comment(std::string& header, std::string_view comment) {
   if (comment.empty()) return;
   std::string line = "# ";
   line += comment;
@@ -806,6 +810,7 @@ std::string encode_pcd(const core::OrganizedScan& scan, std::span<const std::uin
 }
 
 std::string pcd_points_header(std::size_t n, PcdEncoding encoding, std::string_view comment) {
+  check_comment(comment);
   std::string header = fields_header(n, n, 1, false, encoding);
   insert_comment(header, comment);
   return header;
@@ -814,9 +819,7 @@ std::string pcd_points_header(std::size_t n, PcdEncoding encoding, std::string_v
 std::string encode_pcd_points(std::span<const Eigen::Vector3f> points,
                               std::span<const float> intensities, PcdEncoding encoding,
                               std::string_view comment) {
-  if (comment.find_first_of("\r\n") != std::string_view::npos) {
-    throw core::Error("encode_pcd_points: a header comment must be one line");
-  }
+  check_comment(comment);  // before the encoding's work
   if (!intensities.empty() && intensities.size() != points.size()) {
     throw core::Error("encode_pcd_points: " + std::to_string(intensities.size()) +
                       " intensities for " + std::to_string(points.size()) + " points");

@@ -15,6 +15,7 @@
 #include "ringtrack/mapping/dynamic_object_filter.hpp"
 #include "ringtrack/mapping/static_map.hpp"
 #include "ringtrack/tracking/tracker.hpp"
+#include "support/map_points.hpp"
 #include "support/scripted_detections.hpp"
 
 namespace ringtrack::mapping {
@@ -513,19 +514,7 @@ TEST(DynamicObjectFilter, MapRadiusBoundsTheMapAndHandsOverEveryVoxelThatLeaves)
   EXPECT_LE(largest, size_at_400 + size_at_400 / 10);
   std::vector<MapPoint> together = near.map().points();
   together.insert(together.end(), evicted.begin(), evicted.end());
-  std::vector<MapPoint> expected = all.map().points();
-  const auto by_value = [](const MapPoint& p, const MapPoint& q) {
-    return std::tie(p.position.x(), p.position.y(), p.position.z(), p.intensity, p.count) <
-           std::tie(q.position.x(), q.position.y(), q.position.z(), q.intensity, q.count);
-  };
-  std::sort(together.begin(), together.end(), by_value);
-  std::sort(expected.begin(), expected.end(), by_value);
-  ASSERT_EQ(together.size(), expected.size());
-  for (std::size_t i = 0; i < expected.size(); ++i) {
-    ASSERT_EQ(together[i].position, expected[i].position) << i;
-    ASSERT_EQ(together[i].intensity, expected[i].intensity) << i;
-    ASSERT_EQ(together[i].count, expected[i].count) << i;
-  }
+  test::expect_same_map_points(together, all.map().points(), "evicted + kept vs unbounded");
 }
 
 TEST(DynamicObjectFilter, RejectsHypothesesNamingMissingDetections) {

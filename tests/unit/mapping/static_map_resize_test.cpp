@@ -6,16 +6,15 @@
 
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
 #include <map>
 #include <random>
-#include <tuple>
 #include <vector>
 
 #include "ringtrack/mapping/static_map.hpp"
+#include "support/map_points.hpp"
 
 namespace ringtrack::mapping {
 namespace {
@@ -78,22 +77,6 @@ class NaiveMap {
   float inverse_;
   std::map<std::array<std::int64_t, 3>, MapPoint> voxels_;
 };
-
-// The same voxels, whatever their order.
-void expect_same_points(std::vector<MapPoint> a, std::vector<MapPoint> b, const char* where) {
-  const auto by_value = [](const MapPoint& p, const MapPoint& q) {
-    return std::tie(p.position.x(), p.position.y(), p.position.z(), p.intensity, p.count) <
-           std::tie(q.position.x(), q.position.y(), q.position.z(), q.intensity, q.count);
-  };
-  std::sort(a.begin(), a.end(), by_value);
-  std::sort(b.begin(), b.end(), by_value);
-  ASSERT_EQ(a.size(), b.size()) << where;
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    ASSERT_EQ(a[i].position, b[i].position) << where << ", voxel " << i;
-    ASSERT_EQ(a[i].intensity, b[i].intensity) << where << ", voxel " << i;
-    ASSERT_EQ(a[i].count, b[i].count) << where << ", voxel " << i;
-  }
-}
 
 void expect_same(const StaticMap& map, const NaiveMap& reference, const char* where) {
   ASSERT_EQ(map.size(), reference.size()) << where;
@@ -190,7 +173,7 @@ TEST(StaticMapResize, MatchesANaiveMapThroughManyResizes) {
       std::vector<MapPoint> evicted, expected;
       EXPECT_EQ(map.remove_outside(c, 20.0f, evicted), reference.remove_outside(c, 20.0f, expected))
           << "batch " << batch;
-      expect_same_points(evicted, expected, "evicted");
+      test::expect_same_map_points(evicted, expected, "evicted");
       if (!expected.empty()) ++evictions;
     }
     if (batch % 10 == 0 || map.resizing()) expect_same(map, reference, "during the run");
