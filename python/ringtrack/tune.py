@@ -437,6 +437,27 @@ def run(args, argv):
     out = pathlib.Path(args.out)
     storage = make_storage(args, out)  # a database is reached before anything is written
     tuning.ensure_dir(out)
+    if args.worker:  # a worker writes no outputs (the main process or --report does)
+        return tune_into(args, argv, out, storage, space, objectives, builtins, base_yaml)
+    # run.json says whether report.md, trials.csv and the rest are whole (docs/formats.md): an
+    # interrupted study wrote none of them, so it is not complete until a resumed run ends.
+    status = rt.RunStatusFile(str(out / "run.json"), "tune", ["ringtrack", "tune", *argv])
+    status.start()
+    try:
+        code = tune_into(args, argv, out, storage, space, objectives, builtins, base_yaml)
+    except BaseException as e:
+        status.fail(str(e) or type(e).__name__)
+        raise
+    if code == 0:
+        status.finish()
+    else:
+        status.fail(f"interrupted by {signal.Signals(_stopped_by[0]).name} before the outputs "
+                    "were written; run the same command again to resume the study")
+    return code
+
+
+def tune_into(args, argv, out, storage, space, objectives, builtins, base_yaml):
+    """The tuning itself (or --report) into the output folder out."""
     if args.report:
         return report_only(args, out, storage, base_yaml, space)
     worker_index = int(os.environ.get("RINGTRACK_TUNE_WORKER_INDEX", "0"))

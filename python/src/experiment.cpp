@@ -15,6 +15,8 @@
 #include "ringtrack/experiment/recorded_scenario.hpp"
 #include "ringtrack/experiment/recorded_sequence.hpp"
 #include "ringtrack/experiment/results_json.hpp"
+#include "ringtrack/io/run_status.hpp"
+#include "ringtrack/version.hpp"
 #include "sim_scenario.hpp"
 
 namespace ringtrack::python {
@@ -122,9 +124,8 @@ void bind_recorded(py::module_& m) {
       .def_property_readonly("memory_bytes", &Recorded::memory_bytes)
       .def("__len__", &Recorded::size);
   m.def("record_runs", &record_runs, py::arg("builtins") = std::vector<int>{1, 2, 3, 4, 5, 6, 7},
-        py::arg("scenario_files") = std::vector<std::string>{},
-        py::arg("duration_s") = py::none(), py::arg("sensors") = "both", py::arg("seed") = 1,
-        py::arg("deskew") = true,
+        py::arg("scenario_files") = std::vector<std::string>{}, py::arg("duration_s") = py::none(),
+        py::arg("sensors") = "both", py::arg("seed") = 1, py::arg("deskew") = true,
         "The benchmark's runs (each scenario with a static and a moving sensor), simulated once: "
         "built-ins (numbers 1-7) and scenario files (the validation group).");
   m.def("scenario_files_in", &experiment::scenario_files_in, py::arg("folder"),
@@ -191,7 +192,8 @@ void bind_evaluate(py::module_& m) {
         o.evaluation.min_points = min_points;
         o.evaluation.moving_radius_m = moving_radius_m;
         o.ignore_stamps = ignore_stamps;
-        const eval::TrackingEvalResult r = experiment::evaluate_track_files(objects_csv, tracks_csv, o);
+        const eval::TrackingEvalResult r =
+            experiment::evaluate_track_files(objects_csv, tracks_csv, o);
         nlohmann::ordered_json j;
         j["hypotheses_total"] = r.hypotheses_total;
         j["hypotheses_evaluated"] = r.hypotheses_evaluated;
@@ -203,8 +205,7 @@ void bind_evaluate(py::module_& m) {
       },
       py::arg("objects_csv"), py::arg("tracks_csv"), py::arg("threshold_m") = 0.5,
       py::arg("hypotheses") = "dynamic", py::arg("target_class") = "person",
-      py::arg("min_points") = 1, py::arg("moving_radius_m") = 1.0,
-      py::arg("ignore_stamps") = false,
+      py::arg("min_points") = 1, py::arg("moving_radius_m") = 1.0, py::arg("ignore_stamps") = false,
       "CLEAR MOT, MT/PT/ML and identity metrics of tracks.csv against objects.csv, as "
       "`ringtrack eval --json` (docs/evaluation.md).");
   m.def(
@@ -224,10 +225,34 @@ void bind_evaluate(py::module_& m) {
 
 }  // namespace
 
+// run.json for an output folder written from Python (`ringtrack tune`): the CLI's writer, so
+// the file is the same (docs/formats.md) and every write is atomic.
+void bind_run_status(py::module_& m) {
+  py::class_<io::RunStatusFile>(m, "RunStatusFile",
+                                "run.json of an output folder: whether its outputs are whole "
+                                "(docs/formats.md).")
+      .def(py::init([](const std::string& path, const std::string& command,
+                       const std::vector<std::string>& arguments) {
+             io::RunStatus status;
+             status.command = command;
+             status.arguments = arguments;
+             status.version = kVersion;
+             return io::RunStatusFile(path, status);
+           }),
+           py::arg("path"), py::arg("command"), py::arg("arguments"))
+      .def("start", &io::RunStatusFile::start, "Writes it as running (complete: false).")
+      .def("finish", &io::RunStatusFile::finish, py::arg("signal") = "",
+           "Marks the outputs whole: finished, or interrupted by signal (\"SIGINT\", "
+           "\"SIGTERM\") after writing them.")
+      .def("fail", &io::RunStatusFile::fail, py::arg("error"),
+           "Marks the run failed (not complete) with the error; never raises.");
+}
+
 void bind_experiment(py::module_& m) {
   bind_recorded(m);
   bind_runs(m);
   bind_evaluate(m);
+  bind_run_status(m);
 }
 
 }  // namespace ringtrack::python

@@ -3,6 +3,7 @@ benchmark's own groups), studies that resume, local workers, and a PostgreSQL st
 two workers, one of them killed."""
 
 import csv
+import json
 import os
 import pathlib
 import shutil
@@ -175,7 +176,14 @@ def test_interrupt_then_resume(tmp_path, stop):
     proc.send_signal(stop)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + stop and "resume" in err and stop.name in err
+    # No report was written: run.json says the folder's outputs are not whole.
+    status = json.loads((out / "run.json").read_text())
+    assert status["complete"] is False and status["state"] == "failed"
+    assert stop.name in status["error"] and "resume" in status["error"]
     tune("--trials", 3, "--out", out, *SMALL)  # resumes; the budget is already met or near
+    status = json.loads((out / "run.json").read_text())
+    assert status["complete"] is True and status["state"] == "finished"
+    assert status["command"] == "tune" and status["error"] is None
     rows = trials(out / "trials.csv")
     assert not any(r["state"] == "RUNNING" for r in rows)
     assert len([r for r in rows if r["state"] in ("COMPLETE", "PRUNED")]) >= 3
