@@ -220,22 +220,40 @@ def test_two_workers_on_postgresql_record_every_trial_once(tmp_path, postgres):
     assert len({t.user_attrs["worker"] for t in study.trials}) == 2
 
 
+def running_trials(postgres, study_name):
+    try:
+        study = optuna.load_study(study_name=study_name, storage=postgres)
+    except KeyError:
+        return None, []
+    return study, [t for t in study.trials if t.state == optuna.trial.TrialState.RUNNING]
+
+
+def kill_worker_inside_a_trial(tmp_path, postgres, study_name, beat):
+    """SIGKILL a worker while one of its trials is RUNNING in the database.
+
+    A kill can land in the short gap between one trial's end and the next one's start; the
+    dead worker then leaves nothing running and there is nothing to test. Such a kill is
+    retried with a new worker (the study keeps what the last one recorded)."""
+    for attempt in range(5):
+        victim = worker(postgres, study_name, 400, tmp_path / f"victim{attempt}", *beat)
+        deadline = time.time() + 120
+        running = []
+        while time.time() < deadline and not running:
+            time.sleep(0.3)
+            study, running = running_trials(postgres, study_name)
+            running = running if study is not None and len(study.trials) >= 2 else []
+        assert running, "the worker never started a trial"
+        victim.send_signal(signal.SIGKILL)
+        victim.wait()
+        study, left_running = running_trials(postgres, study_name)
+        if left_running:
+            return study
+    pytest.fail("five kills in a row landed between trials")
+
+
 def test_killed_worker_leaves_no_trial_running(tmp_path, postgres):
     beat = ["--heartbeat", "1", "--grace", "3"]
-    victim = worker(postgres, "killed", 400, tmp_path / "victim", *beat)
-    deadline = time.time() + 120
-    running = []
-    while time.time() < deadline and not running:
-        time.sleep(0.3)
-        try:
-            study = optuna.load_study(study_name="killed", storage=postgres)
-        except KeyError:
-            continue
-        running = [t for t in study.trials if t.state == optuna.trial.TrialState.RUNNING
-                   and len(study.trials) >= 2]
-    assert running, "the worker never started a trial"
-    victim.send_signal(signal.SIGKILL)
-    victim.wait()
+    study = kill_worker_inside_a_trial(tmp_path, postgres, "killed", beat)
     time.sleep(4)  # past the grace period
     survivor = worker(postgres, "killed", len(study.trials) + 2, tmp_path / "survivor", *beat)
     assert survivor.wait(timeout=300) == 0
