@@ -150,10 +150,6 @@ void BackgroundRangeModel::map_columns(const OrganizedScan& scan) {
   }
 }
 
-bool BackgroundRangeModel::same_surface(float a, float b) const {
-  return std::abs(a - b) <= config_.tolerance_m + config_.relative_tolerance * std::min(a, b);
-}
-
 void BackgroundRangeModel::observe(std::size_t cell, float range_m) {
   const auto same = [&](float a, float b) {
     if (std::isinf(a) || std::isinf(b)) return a == b;

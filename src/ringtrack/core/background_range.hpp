@@ -1,6 +1,8 @@
 #pragma once
 /// Per-cell range of the static background seen by a static sensor, learned over scans.
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -59,8 +61,11 @@ class BackgroundRangeModel : public SceneMemory {
  private:
   [[nodiscard]] int bin_of(double azimuth_rad) const;
   void map_columns(const OrganizedScan& scan);
-  /// Two finite ranges are one surface (within the tolerances).
-  [[nodiscard]] bool same_surface(float a, float b) const;
+  /// Two finite ranges are one surface (within the tolerances). Inline: update() asks it for
+  /// nearly every cell of every scan.
+  [[nodiscard]] bool same_surface(float a, float b) const {
+    return std::abs(a - b) <= config_.tolerance_m + config_.relative_tolerance * std::min(a, b);
+  }
   void observe(std::size_t cell, float range_m);
 
   BackgroundRangeConfig config_;

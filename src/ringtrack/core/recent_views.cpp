@@ -1,7 +1,9 @@
 #include "ringtrack/core/recent_views.hpp"
 
 #include <cmath>
+#include <memory>
 #include <string>
+#include <utility>
 
 #include "ringtrack/core/error.hpp"
 
@@ -25,10 +27,15 @@ RecentViews::RecentViews(const SensorModel& model, const BackgroundRangeConfig& 
 }
 
 void RecentViews::add(const OrganizedScan& scan, const Pose& pose, const Motion& motion) {
+  add(scan, pose, motion, std::make_shared<const BeamGeometry>(scan, model_));
+}
+
+void RecentViews::add(const OrganizedScan& scan, const Pose& pose, const Motion& motion,
+                      std::shared_ptr<const BeamGeometry> geometry) {
   View& view = views_[next_];
   view.query.reset();  // it points at the scan about to be overwritten
   view.scan = scan;    // same size as before: the buffers are reused, nothing is allocated
-  view.query.emplace(view.scan, model_, pose, motion);
+  view.query.emplace(view.scan, std::move(geometry), pose, motion);
   next_ = (next_ + 1) % views_.size();
   count_ = std::min(count_ + 1, views_.size());
 }

@@ -27,6 +27,9 @@ class RecentViews : public SceneMemory {
 
   /// Adds a motion-compensated scan with its pose (at scan.stamp_ns) and its sweep's motion.
   void add(const OrganizedScan& scan, const Pose& pose, const Motion& motion);
+  /// The same with the scan's beam geometry (BeamGeometry::fits the scan), shared, not rebuilt.
+  void add(const OrganizedScan& scan, const Pose& pose, const Motion& motion,
+           std::shared_ptr<const BeamGeometry> geometry);
   /// Forgets every scan.
   void reset();
   /// Scans kept (at most four times moving_lag_scans).

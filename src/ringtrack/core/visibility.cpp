@@ -7,6 +7,7 @@
 #include <numbers>
 #include <numeric>
 #include <string>
+#include <utility>
 
 #include "ringtrack/core/error.hpp"
 
@@ -118,25 +119,116 @@ void VisibilityCounts::add(Visibility v) {
   }
 }
 
-VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& model,
-                                 const Pose& pose, const Motion& motion)
-    : scan_(&scan), rings_(scan.rings()), columns_(scan.columns()) {
+BeamGeometry::BeamGeometry(const OrganizedScan& scan, const SensorModel& model)
+    : rings(scan.rings()), columns(scan.columns()), column_azimuth_rad(scan.column_azimuth_rad) {
   model.validate();
   if (scan.rings() != model.rings() || scan.columns() <= 0) {
     throw InputError("visibility query: the scan has " + std::to_string(scan.rings()) + " x " +
                      std::to_string(scan.columns()) + " cells but sensor model '" + model.name +
                      "' has " + std::to_string(model.rings()) + " rings");
   }
-  if (scan.column_azimuth_rad.size() != static_cast<std::size_t>(columns_)) {
-    throw InputError("visibility query: the scan has " + std::to_string(columns_) +
-                     " columns but " + std::to_string(scan.column_azimuth_rad.size()) +
-                     " column azimuths");
+  if (scan.column_azimuth_rad.size() != static_cast<std::size_t>(columns)) {
+    throw InputError("visibility query: the scan has " + std::to_string(columns) + " columns but " +
+                     std::to_string(scan.column_azimuth_rad.size()) + " column azimuths");
   }
   for (std::size_t c = 0; c < scan.column_azimuth_rad.size(); ++c) {
     if (!std::isfinite(scan.column_azimuth_rad[c])) {
       throw InputError("visibility query: column " + std::to_string(c) +
                        " has a non-finite azimuth");
     }
+  }
+
+  // Rings: acceptance band of half the gap to each neighbour; a nominal (mean) gap at the ends.
+  const auto nr = static_cast<std::size_t>(rings);
+  elevation_rad = model.elevation_rad;
+  offset_m = model.vertical_offset_m;
+  az_offset_rad = model.azimuth_offset_rad;
+  const double nominal_gap = rings > 1
+                                 ? (elevation_rad.back() - elevation_rad.front()) / (rings - 1)
+                                 : model.azimuth_step_rad();
+  cos_el.resize(nr);
+  sin_el.resize(nr);
+  cos_az_off.resize(nr);
+  sin_az_off.resize(nr);
+  accept_below_rad.resize(nr);
+  accept_above_rad.resize(nr);
+  for (std::size_t r = 0; r < nr; ++r) {
+    cos_el[r] = std::cos(elevation_rad[r]);
+    sin_el[r] = std::sin(elevation_rad[r]);
+    cos_az_off[r] = std::cos(az_offset_rad[r]);
+    sin_az_off[r] = std::sin(az_offset_rad[r]);
+    accept_below_rad[r] = 0.5 * (r == 0 ? nominal_gap : elevation_rad[r] - elevation_rad[r - 1]);
+    accept_above_rad[r] =
+        0.5 * (r + 1 == nr ? nominal_gap : elevation_rad[r + 1] - elevation_rad[r]);
+  }
+  max_abs_elevation_rad = std::max(std::abs(elevation_rad.front()), std::abs(elevation_rad.back()));
+  offset_min_m = *std::min_element(offset_m.begin(), offset_m.end());
+  offset_max_m = *std::max_element(offset_m.begin(), offset_m.end());
+
+  // Columns: sorted wrapped azimuths (any order or wrap of the capture), nominal step, buckets.
+  const auto nc = static_cast<std::size_t>(columns);
+  cos_az.resize(nc);
+  sin_az.resize(nc);
+  std::vector<std::pair<double, int>> order(nc);
+  std::size_t smallest = 0;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const double az = scan.column_azimuth_rad[c];
+    cos_az[c] = std::cos(az);
+    sin_az[c] = std::sin(az);
+    order[c] = {wrap_two_pi(az), static_cast<int>(c)};
+    if (order[c] < order[smallest]) smallest = c;
+  }
+  // A capture's azimuths ascend modulo 2 pi: starting at the smallest they are usually sorted
+  // already, which saves the sort.
+  std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(smallest), order.end());
+  if (!std::is_sorted(order.begin(), order.end())) std::sort(order.begin(), order.end());
+  sorted_az.resize(nc);
+  sorted_column.resize(nc);
+  for (std::size_t i = 0; i < nc; ++i) {
+    sorted_az[i] = order[i].first;
+    sorted_column[i] = order[i].second;
+  }
+  if (nc > 1) {
+    std::vector<double> gaps;
+    gaps.reserve(nc);
+    for (std::size_t i = 0; i < nc; ++i) {
+      const double next = i + 1 < nc ? sorted_az[i + 1] : sorted_az[0] + kTwoPi;
+      if (next - sorted_az[i] > 0.0) gaps.push_back(next - sorted_az[i]);
+    }
+    auto mid = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
+    std::nth_element(gaps.begin(), mid, gaps.end());
+    nominal_step_rad = *mid;
+  } else {
+    nominal_step_rad = model.azimuth_step_rad();
+  }
+  const std::size_t buckets = 4 * nc;
+  bucket.resize(buckets);
+  std::size_t first = 0;  // lower bound of each bucket's start, found by one merge-like pass
+  for (std::size_t b = 0; b < buckets; ++b) {
+    const double start = kTwoPi * static_cast<double>(b) / static_cast<double>(buckets);
+    while (first < nc && sorted_az[first] < start) ++first;
+    bucket[b] = static_cast<int>(first);
+  }
+}
+
+bool BeamGeometry::fits(const OrganizedScan& scan) const {
+  return scan.rings() == rings && scan.column_azimuth_rad == column_azimuth_rad;
+}
+
+VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& model,
+                                 const Pose& pose, const Motion& motion)
+    : VisibilityQuery(scan, std::make_shared<const BeamGeometry>(scan, model), pose, motion) {}
+
+VisibilityQuery::VisibilityQuery(const OrganizedScan& scan,
+                                 std::shared_ptr<const BeamGeometry> geometry, const Pose& pose,
+                                 const Motion& motion)
+    : scan_(&scan), rings_(scan.rings()), columns_(scan.columns()), geo_(std::move(geometry)) {
+  if (geo_ == nullptr || geo_->rings != rings_ || geo_->columns != columns_) {
+    throw InputError("visibility query: the scan has " + std::to_string(rings_) + " x " +
+                     std::to_string(columns_) + " cells, its beam geometry " +
+                     (geo_ == nullptr
+                          ? std::string("is missing")
+                          : std::to_string(geo_->rings) + " x " + std::to_string(geo_->columns)));
   }
   if (!pose.translation.allFinite() || !pose.rotation.coeffs().allFinite() ||
       !(pose.rotation.norm() > 0.0)) {
@@ -149,79 +241,6 @@ VisibilityQuery::VisibilityQuery(const OrganizedScan& scan, const SensorModel& m
   world_t_sensor_ = world_T_sensor.translation();
   sensor_R_world_ = world_R_sensor_.transpose();
   sensor_t_world_ = -(sensor_R_world_ * world_t_sensor_);
-
-  // Rings: acceptance band of half the gap to each neighbour; a nominal (mean) gap at the ends.
-  const auto nr = static_cast<std::size_t>(rings_);
-  elevation_rad_ = model.elevation_rad;
-  offset_m_ = model.vertical_offset_m;
-  az_offset_rad_ = model.azimuth_offset_rad;
-  const double nominal_gap = rings_ > 1
-                                 ? (elevation_rad_.back() - elevation_rad_.front()) / (rings_ - 1)
-                                 : model.azimuth_step_rad();
-  cos_el_.resize(nr);
-  sin_el_.resize(nr);
-  cos_az_off_.resize(nr);
-  sin_az_off_.resize(nr);
-  accept_below_rad_.resize(nr);
-  accept_above_rad_.resize(nr);
-  for (std::size_t r = 0; r < nr; ++r) {
-    cos_el_[r] = std::cos(elevation_rad_[r]);
-    sin_el_[r] = std::sin(elevation_rad_[r]);
-    cos_az_off_[r] = std::cos(az_offset_rad_[r]);
-    sin_az_off_[r] = std::sin(az_offset_rad_[r]);
-    accept_below_rad_[r] = 0.5 * (r == 0 ? nominal_gap : elevation_rad_[r] - elevation_rad_[r - 1]);
-    accept_above_rad_[r] =
-        0.5 * (r + 1 == nr ? nominal_gap : elevation_rad_[r + 1] - elevation_rad_[r]);
-  }
-  max_abs_elevation_rad_ =
-      std::max(std::abs(elevation_rad_.front()), std::abs(elevation_rad_.back()));
-  offset_min_m_ = *std::min_element(offset_m_.begin(), offset_m_.end());
-  offset_max_m_ = *std::max_element(offset_m_.begin(), offset_m_.end());
-
-  // Columns: sorted wrapped azimuths (any order or wrap of the capture), nominal step, buckets.
-  const auto nc = static_cast<std::size_t>(columns_);
-  cos_az_.resize(nc);
-  sin_az_.resize(nc);
-  std::vector<std::pair<double, int>> order(nc);
-  std::size_t smallest = 0;
-  for (std::size_t c = 0; c < nc; ++c) {
-    const double az = scan.column_azimuth_rad[c];
-    cos_az_[c] = std::cos(az);
-    sin_az_[c] = std::sin(az);
-    order[c] = {wrap_two_pi(az), static_cast<int>(c)};
-    if (order[c] < order[smallest]) smallest = c;
-  }
-  // A capture's azimuths ascend modulo 2 pi: starting at the smallest they are usually sorted
-  // already, which saves the sort.
-  std::rotate(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(smallest), order.end());
-  if (!std::is_sorted(order.begin(), order.end())) std::sort(order.begin(), order.end());
-  sorted_az_.resize(nc);
-  sorted_column_.resize(nc);
-  for (std::size_t i = 0; i < nc; ++i) {
-    sorted_az_[i] = order[i].first;
-    sorted_column_[i] = order[i].second;
-  }
-  if (nc > 1) {
-    std::vector<double> gaps;
-    gaps.reserve(nc);
-    for (std::size_t i = 0; i < nc; ++i) {
-      const double next = i + 1 < nc ? sorted_az_[i + 1] : sorted_az_[0] + kTwoPi;
-      if (next - sorted_az_[i] > 0.0) gaps.push_back(next - sorted_az_[i]);
-    }
-    auto mid = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
-    std::nth_element(gaps.begin(), mid, gaps.end());
-    nominal_step_rad_ = *mid;
-  } else {
-    nominal_step_rad_ = model.azimuth_step_rad();
-  }
-  const std::size_t buckets = 4 * nc;
-  bucket_.resize(buckets);
-  std::size_t first = 0;  // lower bound of each bucket's start, found by one merge-like pass
-  for (std::size_t b = 0; b < buckets; ++b) {
-    const double start = kTwoPi * static_cast<double>(b) / static_cast<double>(buckets);
-    while (first < nc && sorted_az_[first] < start) ++first;
-    bucket_[b] = static_cast<int>(first);
-  }
   set_motion(motion);
 }
 
@@ -280,29 +299,29 @@ std::optional<int> VisibilityQuery::column_of_azimuth(double azimuth_rad) const 
   if (!std::isfinite(azimuth_rad)) return std::nullopt;
   const double a = wrap_two_pi(azimuth_rad);
   const int n = columns_;
-  const auto nb = bucket_.size();
+  const auto nb = geo_->bucket.size();
   const auto b = std::min(nb - 1, static_cast<std::size_t>(a / kTwoPi * static_cast<double>(nb)));
   // j becomes the first sorted index whose azimuth exceeds a; the walks make the bucket's
   // rounding irrelevant, so this equals upper_bound.
-  int j = bucket_[b];
-  while (j > 0 && sorted_az_[static_cast<std::size_t>(j - 1)] > a) --j;
-  while (j < n && sorted_az_[static_cast<std::size_t>(j)] <= a) ++j;
+  int j = geo_->bucket[b];
+  while (j > 0 && geo_->sorted_az[static_cast<std::size_t>(j - 1)] > a) --j;
+  while (j < n && geo_->sorted_az[static_cast<std::size_t>(j)] <= a) ++j;
   const int lo = j == 0 ? n - 1 : j - 1;
   const int hi = j == n ? 0 : j;
-  const double az_lo = sorted_az_[static_cast<std::size_t>(lo)] - (j == 0 ? kTwoPi : 0.0);
-  const double az_hi = sorted_az_[static_cast<std::size_t>(hi)] + (j == n ? kTwoPi : 0.0);
+  const double az_lo = geo_->sorted_az[static_cast<std::size_t>(lo)] - (j == 0 ? kTwoPi : 0.0);
+  const double az_hi = geo_->sorted_az[static_cast<std::size_t>(hi)] + (j == n ? kTwoPi : 0.0);
   const double below = a - az_lo;
   const double above = az_hi - a;
   int pick = -1;
-  if (az_hi - az_lo <= 2.0 * nominal_step_rad_) {
+  if (az_hi - az_lo <= 2.0 * geo_->nominal_step_rad) {
     pick = below <= above ? lo : hi;
-  } else if (below <= 0.5 * nominal_step_rad_) {
+  } else if (below <= 0.5 * geo_->nominal_step_rad) {
     pick = lo;  // a gap (dropped packets, partial revolution): half a step from its ends
-  } else if (above <= 0.5 * nominal_step_rad_) {
+  } else if (above <= 0.5 * geo_->nominal_step_rad) {
     pick = hi;
   }
   if (pick < 0) return std::nullopt;
-  return sorted_column_[static_cast<std::size_t>(pick)];
+  return geo_->sorted_column[static_cast<std::size_t>(pick)];
 }
 
 std::optional<int> VisibilityQuery::ring_of_sensor_point(const Eigen::Vector3d& p) const {
@@ -310,8 +329,8 @@ std::optional<int> VisibilityQuery::ring_of_sensor_point(const Eigen::Vector3d& 
   const double rho = std::hypot(p.x(), p.y());
   // Elevation seen from the middle beam origin bounds the elevation seen from every ring's
   // origin (at most half_spread away): only rings whose band meets that bound are evaluated.
-  const double mid = 0.5 * (offset_min_m_ + offset_max_m_);
-  const double half_spread = 0.5 * (offset_max_m_ - offset_min_m_);
+  const double mid = 0.5 * (geo_->offset_min_m + geo_->offset_max_m);
+  const double half_spread = 0.5 * (geo_->offset_max_m - geo_->offset_min_m);
   const double dist = std::hypot(rho, p.z() - mid);
   double lo_e = -std::numbers::pi;
   double hi_e = std::numbers::pi;
@@ -325,12 +344,12 @@ std::optional<int> VisibilityQuery::ring_of_sensor_point(const Eigen::Vector3d& 
   double best_dev = std::numeric_limits<double>::infinity();
   for (int r = 0; r < rings_; ++r) {
     const auto i = static_cast<std::size_t>(r);
-    if (elevation_rad_[i] + accept_above_rad_[i] < lo_e) continue;
-    if (elevation_rad_[i] - accept_below_rad_[i] > hi_e) break;
-    const double dz = p.z() - offset_m_[i];
+    if (geo_->elevation_rad[i] + geo_->accept_above_rad[i] < lo_e) continue;
+    if (geo_->elevation_rad[i] - geo_->accept_below_rad[i] > hi_e) break;
+    const double dz = p.z() - geo_->offset_m[i];
     if (rho == 0.0 && dz == 0.0) continue;  // the point is the beam origin
-    const double dev = std::atan2(dz, rho) - elevation_rad_[i];
-    if (dev < -accept_below_rad_[i] || dev > accept_above_rad_[i]) continue;
+    const double dev = std::atan2(dz, rho) - geo_->elevation_rad[i];
+    if (dev < -geo_->accept_below_rad[i] || dev > geo_->accept_above_rad[i]) continue;
     if (std::abs(dev) < best_dev) {
       best_dev = std::abs(dev);
       best = r;
@@ -369,9 +388,9 @@ std::optional<VisibilityQuery::Located> VisibilityQuery::locate_sensor_point(
   const auto ring = ring_of_sensor_point(p);
   if (!ring) return std::nullopt;
   const auto r = static_cast<std::size_t>(*ring);
-  const auto column = column_of_azimuth(std::atan2(p.y(), p.x()) - az_offset_rad_[r]);
+  const auto column = column_of_azimuth(std::atan2(p.y(), p.x()) - geo_->az_offset_rad[r]);
   if (!column) return std::nullopt;
-  return Located{*ring, *column, std::hypot(p.x(), p.y(), p.z() - offset_m_[r])};
+  return Located{*ring, *column, std::hypot(p.x(), p.y(), p.z() - geo_->offset_m[r])};
 }
 
 std::optional<std::size_t> VisibilityQuery::cell_of(const Eigen::Vector3d& world_point) const {
@@ -430,14 +449,14 @@ BeamRay VisibilityQuery::cell_ray(int ring, int column) const {
   const auto r = static_cast<std::size_t>(ring);
   const auto c = static_cast<std::size_t>(column);
   // cos/sin of (column azimuth + ring azimuth offset) by the angle-sum identities.
-  const double ca = cos_az_[c] * cos_az_off_[r] - sin_az_[c] * sin_az_off_[r];
-  const double sa = sin_az_[c] * cos_az_off_[r] + cos_az_[c] * sin_az_off_[r];
-  const Eigen::Vector3d d(cos_el_[r] * ca, cos_el_[r] * sa, sin_el_[r]);
+  const double ca = geo_->cos_az[c] * geo_->cos_az_off[r] - geo_->sin_az[c] * geo_->sin_az_off[r];
+  const double sa = geo_->sin_az[c] * geo_->cos_az_off[r] + geo_->cos_az[c] * geo_->sin_az_off[r];
+  const Eigen::Vector3d d(geo_->cos_el[r] * ca, geo_->cos_el[r] * sa, geo_->sin_el[r]);
   if (!moving_) {
-    return {world_R_sensor_.col(2) * offset_m_[r] + world_t_sensor_, world_R_sensor_ * d};
+    return {world_R_sensor_.col(2) * geo_->offset_m[r] + world_t_sensor_, world_R_sensor_ * d};
   }
   const Frame f = column_frame(column);
-  return {f.world_R_sensor.col(2) * offset_m_[r] + f.world_t_sensor, f.world_R_sensor * d};
+  return {f.world_R_sensor.col(2) * geo_->offset_m[r] + f.world_t_sensor, f.world_R_sensor * d};
 }
 
 template <typename Visit>
@@ -484,7 +503,7 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
     }
   }
   // A turn of `turn` moves a direction's azimuth by at most turn / cos(elevation) (small turns).
-  const double steepest = max_abs_elevation_rad_ + turn;
+  const double steepest = geo_->max_abs_elevation_rad + turn;
   const double turn_az = turn == 0.0 ? 0.0 : 1.01 * turn / std::cos(std::min(steepest, 1.4));
   const bool all_azimuths =
       widest <= std::numbers::pi || (turn > 0.0 && (steepest >= 1.4 || widest <= 2.0 * turn_az));
@@ -504,34 +523,35 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
     }
   }
   // Elevation band over every beam origin (the lowest origin sees the box highest).
-  const double dz_hi = z_max - offset_min_m_;
-  const double dz_lo = z_min - offset_max_m_;
+  const double dz_hi = z_max - geo_->offset_min_m;
+  const double dz_lo = z_min - geo_->offset_max_m;
   const double el_max = std::atan2(dz_hi, dz_hi > 0.0 ? rho_min : rho_max) + turn + kSlackRad;
   const double el_min = std::atan2(dz_lo, dz_lo < 0.0 ? rho_min : rho_max) - turn - kSlackRad;
 
-  const auto n = sorted_az_.size();
+  const auto n = geo_->sorted_az.size();
   for (int r = 0; r < rings_; ++r) {
     const auto ri = static_cast<std::size_t>(r);
-    if (elevation_rad_[ri] < el_min) continue;
-    if (elevation_rad_[ri] > el_max) break;
+    if (geo_->elevation_rad[ri] < el_min) continue;
+    if (geo_->elevation_rad[ri] > el_max) break;
     std::size_t first = 0;
     std::size_t count = n;
     double start = 0.0;
     double span = kTwoPi;
     if (!all_azimuths) {
-      start = wrap_two_pi(az_start - az_offset_rad_[ri] - kSlackRad);
+      start = wrap_two_pi(az_start - geo_->az_offset_rad[ri] - kSlackRad);
       span = az_span + 2.0 * kSlackRad;
       first = static_cast<std::size_t>(
-          std::lower_bound(sorted_az_.begin(), sorted_az_.end(), start) - sorted_az_.begin());
+          std::lower_bound(geo_->sorted_az.begin(), geo_->sorted_az.end(), start) -
+          geo_->sorted_az.begin());
     }
     for (std::size_t k = 0; k < count; ++k) {
       const std::size_t s = (first + k) % n;
       if (!all_azimuths) {
-        double off = sorted_az_[s] - start;
+        double off = geo_->sorted_az[s] - start;
         if (off < 0.0) off += kTwoPi;
         if (off > span) break;
       }
-      const int column = sorted_column_[s];
+      const int column = geo_->sorted_column[s];
       const BeamRay ray = cell_ray(r, column);
       double entry = 0.0;
       double exit = 0.0;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Geometry>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -67,6 +68,54 @@ struct PointProbe {
   double beyond_m{0.0};
 };
 
+/// The part of a VisibilityQuery that depends only on the sensor model and the scan's column
+/// azimuths, not on the scan's ranges or pose: per-ring beam geometry and the column lookup.
+/// A sensor's column azimuths usually repeat from revolution to revolution (always in
+/// simulation, often in captures), so the pipeline builds this once and shares it between the
+/// queries of the scans it fits(), which saves the trigonometry and the sort of every column
+/// per scan.
+struct BeamGeometry {
+  /// Validates the model and the scan's column azimuths and precomputes. Throws InputError when
+  /// the scan does not match the model (rings, column azimuths).
+  BeamGeometry(const OrganizedScan& scan, const SensorModel& model);
+  /// True when a scan (of the same sensor model) has exactly these rings and column azimuths.
+  [[nodiscard]] bool fits(const OrganizedScan& scan) const;
+
+  int rings;
+  int columns;
+  std::vector<double> column_azimuth_rad;  // as the scan gave them (fits() compares them)
+  // Per ring.
+  std::vector<double> elevation_rad, cos_el, sin_el, offset_m, az_offset_rad, cos_az_off,
+      sin_az_off, accept_below_rad, accept_above_rad;
+  double max_abs_elevation_rad{0.0};
+  double offset_min_m{0.0};
+  double offset_max_m{0.0};
+  // Per column: cos/sin of its azimuth.
+  std::vector<double> cos_az, sin_az;
+  // Column azimuths wrapped to [0, 2 pi), ascending, with their columns; a bucket table into it.
+  std::vector<double> sorted_az;
+  std::vector<int> sorted_column;
+  std::vector<int> bucket;
+  double nominal_step_rad{0.0};
+};
+
+/// Keeps the BeamGeometry of the last scan and builds a new one only for a scan it does not fit.
+class BeamGeometryCache {
+ public:
+  /// The geometry of this scan of `model` (the same model at every call); throws InputError as
+  /// BeamGeometry's constructor.
+  const std::shared_ptr<const BeamGeometry>& get(const OrganizedScan& scan,
+                                                 const SensorModel& model) {
+    if (geometry_ == nullptr || !geometry_->fits(scan)) {
+      geometry_ = std::make_shared<const BeamGeometry>(scan, model);
+    }
+    return geometry_;
+  }
+
+ private:
+  std::shared_ptr<const BeamGeometry> geometry_;
+};
+
 /// Answers visibility questions about world points and boxes from one organized scan taken at a
 /// pose (sensor in world). Holds a reference to the scan, which must outlive the query.
 /// Construction is O(columns log columns); queries do not allocate (except cells_in_box's output).
@@ -86,6 +135,11 @@ class VisibilityQuery {
   /// at `pose`.
   VisibilityQuery(const OrganizedScan& scan, const SensorModel& model, const Pose& pose,
                   const Motion& motion = {});
+  /// The same with a geometry built for this scan's model and column azimuths (or for an earlier
+  /// scan it fits(); not compared here beyond the ring and column counts, which throw
+  /// InputError). Only the pose and the motion are checked and precomputed: O(1).
+  VisibilityQuery(const OrganizedScan& scan, std::shared_ptr<const BeamGeometry> geometry,
+                  const Pose& pose, const Motion& motion = {});
 
   /// Verdict of the scan about one world point; margin_m >= 0 is the range tolerance in metres.
   [[nodiscard]] Visibility at(const Eigen::Vector3d& world_point, double margin_m) const;
@@ -123,7 +177,7 @@ class VisibilityQuery {
   /// within half the gap to the neighbouring ring (half a nominal gap at the ends).
   [[nodiscard]] std::optional<int> ring_of_sensor_point(const Eigen::Vector3d& sensor_point) const;
   /// Median spacing of the column azimuths (radians), the nominal column step.
-  [[nodiscard]] double nominal_column_step_rad() const { return nominal_step_rad_; }
+  [[nodiscard]] double nominal_column_step_rad() const { return geo_->nominal_step_rad; }
 
   /// The sensor's position in the world (the pose's translation).
   [[nodiscard]] const Eigen::Vector3d& sensor_position() const { return world_t_sensor_; }
@@ -158,19 +212,7 @@ class VisibilityQuery {
   Eigen::Vector3d world_t_sensor_;
   Eigen::Matrix3d sensor_R_world_;
   Eigen::Vector3d sensor_t_world_;
-  // Per ring.
-  std::vector<double> elevation_rad_, cos_el_, sin_el_, offset_m_, az_offset_rad_, cos_az_off_,
-      sin_az_off_, accept_below_rad_, accept_above_rad_;
-  double max_abs_elevation_rad_{0.0};
-  double offset_min_m_{0.0};
-  double offset_max_m_{0.0};
-  // Per column: cos/sin of its azimuth.
-  std::vector<double> cos_az_, sin_az_;
-  // Column azimuths wrapped to [0, 2 pi), ascending, with their columns; a bucket table into it.
-  std::vector<double> sorted_az_;
-  std::vector<int> sorted_column_;
-  std::vector<int> bucket_;
-  double nominal_step_rad_{0.0};
+  std::shared_ptr<const BeamGeometry> geo_;
   // Motion during the sweep (moving_ only): the column's rotation is world_R_sensor_ +
   // sin(a) spin_a_ + (1 - cos(a)) spin_b_ for the angle a = spin_rate_ * dt (Rodrigues, the
   // axis' cross-product matrix K folded in: spin_a_ = K R, spin_b_ = K^2 R).

@@ -150,7 +150,9 @@ void StaticMap::clear() {
   ++generation_;
 }
 
-bool StaticMap::holds(Slot s, std::uint32_t fp, std::uint64_t key) const {
+// Inlined: these three run for every point the map takes (insert_batch).
+[[gnu::always_inline]] inline bool StaticMap::holds(Slot s, std::uint32_t fp,
+                                                    std::uint64_t key) const {
   return slot_fp(s) == fp && is_voxel(s) && voxel(slot_index(s)).key == key;
 }
 
@@ -255,7 +257,7 @@ std::size_t StaticMap::add_voxel(std::uint64_t key) {
   return size_++;
 }
 
-MapPoint& StaticMap::locate(std::uint64_t key, std::uint32_t fp) {
+[[gnu::always_inline]] inline MapPoint& StaticMap::locate(std::uint64_t key, std::uint32_t fp) {
   // While the old table drains, a voxel whose slot is not drained yet is found there (one lookup
   // in one table, not a move per access); the drain moves the slot later. New voxels get a slot
   // in table_ only.
@@ -287,7 +289,8 @@ const MapPoint* StaticMap::voxel_at(const Eigen::Vector3f& p) const {
   return i < table_.size ? &voxel(slot_index(table_[i])).point : nullptr;
 }
 
-void StaticMap::accumulate(MapPoint& m, const Eigen::Vector3f& p, float intensity) {
+[[gnu::always_inline]] inline void StaticMap::accumulate(MapPoint& m, const Eigen::Vector3f& p,
+                                                         float intensity) {
   if (m.count >= kSettledCount) return;  // the mean is settled
   ++m.count;
   const float w = 1.0f / static_cast<float>(m.count);
@@ -324,13 +327,15 @@ void StaticMap::insert(const std::vector<Eigen::Vector3f>& points,
                        const std::vector<std::uint32_t>& cells, SettledCells& settled) {
   std::uint32_t max_cell = 0;
   for (const auto c : cells) max_cell = std::max(max_cell, c);
-  if (settled.generation != generation_ || settled.key.size() <= max_cell) {
-    settled.key.assign(std::max<std::size_t>(settled.key.size(), std::size_t{max_cell} + 1),
-                       kNoKey);
+  const std::size_t needed = SettledCells::kKeysPerCell * (std::size_t{max_cell} + 1);
+  if (settled.generation != generation_ || settled.key.size() < needed) {
+    settled.key.assign(std::max(settled.key.size(), needed), kNoKey);
     settled.generation = generation_;
   }
   insert_batch(points, intensities, skip, &cells, &settled);
 }
+
+static_assert(SettledCells::kKeysPerCell == 4, "insert_batch compares four keys per cell");
 
 void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
                              const std::vector<float>& intensities,
@@ -356,7 +361,11 @@ void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
         continue;
       }
       // A settled voxel ignores further points: nothing to do.
-      if (settled != nullptr && settled->key[(*cells)[i]] == keys[n]) continue;
+      if (settled != nullptr) {
+        const std::uint64_t* known = &settled->key[SettledCells::kKeysPerCell * (*cells)[i]];
+        const std::uint64_t k = keys[n];
+        if (known[0] == k || known[1] == k || known[2] == k || known[3] == k) continue;
+      }
       which[n++] = static_cast<std::uint32_t>(i);
     }
     make_room(n);
@@ -391,8 +400,12 @@ void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
         last_key_ = keys[j];
       }
       accumulate(*last_point_, points[which[j]], intensities[which[j]]);
-      if (settled != nullptr) {
-        settled->key[(*cells)[which[j]]] = last_point_->count >= kSettledCount ? keys[j] : kNoKey;
+      if (settled != nullptr && last_point_->count >= kSettledCount) {
+        // Newest first; the oldest of the cell's settled voxels is forgotten.
+        std::uint64_t* known = &settled->key[SettledCells::kKeysPerCell * (*cells)[which[j]]];
+        std::copy_backward(known, known + SettledCells::kKeysPerCell - 1,
+                           known + SettledCells::kKeysPerCell);
+        known[0] = keys[j];
       }
     }
     advance_resize(std::max(size_ - before, (end - begin) / kPointsPerUnit));

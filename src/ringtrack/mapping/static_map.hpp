@@ -17,10 +17,15 @@ struct MapPoint {
   std::uint32_t count{0};                             ///< points averaged
 };
 
-/// Per-grid-cell memory of the settled voxel each cell's point last went to: a static sensor
-/// sees the same voxels scan after scan, and these points then need no map lookup at all.
+/// Per-grid-cell memory of the settled voxels each cell's points last went to: a static sensor
+/// sees the same voxels scan after scan, and these points then need no map lookup at all. Range
+/// noise spreads one cell's points over two to four neighbouring voxels (3 cm of noise against
+/// 10 cm voxels moves most points into another voxel than the cell's previous one), so each cell
+/// keeps its last four settled voxels, not one.
 struct SettledCells {
-  std::vector<std::uint64_t> key;               ///< per cell: voxel key, or all ones when unknown
+  static constexpr std::size_t kKeysPerCell = 4;  ///< settled voxels remembered per cell
+  /// kKeysPerCell keys per cell (cell c at c * kKeysPerCell), newest first; all ones: none
+  std::vector<std::uint64_t> key;
   std::uint64_t generation{~std::uint64_t{0}};  ///< map generation the keys belong to
 };
 

@@ -134,10 +134,11 @@ const FrameResult& Pipeline::process(const core::OrganizedScan& scan,
   const core::Motion motion = sweep_motion(scan, pose);
   const auto& detections = completer_.complete(
       scan, pose, detector_.detect(scan, labels_, pose, predictions, scene_memory(resting)));
-  if (sparse_on) remember(scan, pose, motion, resting);
+  const auto& geometry = beam_geometry_.get(scan, model_);
+  if (sparse_on) remember(scan, pose, motion, resting, geometry);
   const auto t2 = Clock::now();
   // What this scan sees of the space hypotheses occupied (free-space tests; docs/visibility.md).
-  const core::VisibilityQuery visibility(scan, model_, pose, motion);
+  const core::VisibilityQuery visibility(scan, geometry, pose, motion);
   const auto& hypotheses = tracker_.update(detections, scan.stamp_ns, &visibility);
   const auto t3 = Clock::now();
   const auto& filtered =
@@ -166,13 +167,14 @@ const core::SceneMemory* Pipeline::scene_memory(bool resting) const {
 }
 
 void Pipeline::remember(const core::OrganizedScan& scan, const core::Pose& pose,
-                        const core::Motion& motion, bool resting) {
+                        const core::Motion& motion, bool resting,
+                        const std::shared_ptr<const core::BeamGeometry>& geometry) {
   if (resting) {
     background_.update(scan);
     // What the sensor saw before it came to rest is stale by the time it moves on.
     recent_views_.reset();
   } else if (config_.background.moving_memory) {
-    recent_views_.add(scan, pose, motion);
+    recent_views_.add(scan, pose, motion, geometry);
   }
 }
 

@@ -15,6 +15,7 @@
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/core/pose.hpp"
 #include "ringtrack/core/recent_views.hpp"
+#include "ringtrack/core/visibility.hpp"
 #include "ringtrack/detection/completion.hpp"
 #include "ringtrack/detection/detector.hpp"
 #include "ringtrack/mapping/dynamic_object_filter.hpp"
@@ -140,7 +141,9 @@ class Pipeline {
   /// learns this scan into it afterwards (remember()).
   [[nodiscard]] const core::SceneMemory* scene_memory(bool resting) const;
   void remember(const core::OrganizedScan& scan, const core::Pose& pose, const core::Motion& motion,
-                bool resting);
+                bool resting, const std::shared_ptr<const core::BeamGeometry>& geometry);
+  // The beam geometry of the visibility queries, rebuilt only when the column azimuths change.
+  core::BeamGeometryCache beam_geometry_;
   /// The sensor's motion during this scan, taken as the motion from the previous scan's pose.
   [[nodiscard]] core::Motion sweep_motion(const core::OrganizedScan& scan,
                                           const core::Pose& pose) const;

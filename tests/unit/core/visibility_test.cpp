@@ -522,5 +522,40 @@ TEST(Visibility, RejectsMismatchedScansAndBadPoses) {
   EXPECT_NO_THROW(VisibilityQuery(scan, m, Pose{}));
 }
 
+// A query over a shared geometry (built for an earlier scan with the same column azimuths) gives
+// every answer a query building its own gives; the cache rebuilds when the azimuths change.
+TEST(Visibility, SharedBeamGeometryAnswersAsAFreshOne) {
+  const auto m = SensorModel::vlp16();
+  OrganizedScan earlier = wall_scan(m, 12.0f);
+  OrganizedScan scan = wall_scan(m, 7.0f);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> range(1.0f, 30.0f);
+  for (int r = 0; r < m.rings(); ++r) {
+    for (int c = 0; c < m.columns(); c += 3) scan.set_range(m, r, c, range(rng), 1.0f);
+  }
+  BeamGeometryCache cache;
+  const auto geometry = cache.get(earlier, m);
+  EXPECT_EQ(cache.get(scan, m), geometry);  // same azimuths: not rebuilt
+  const Pose pose = make_pose({1.0, -2.0, 0.5}, {0.1, 0.2, 1.0}, 0.7);
+  const VisibilityQuery fresh(scan, m, pose);
+  const VisibilityQuery shared(scan, geometry, pose);
+  std::uniform_real_distribution<double> coord(-25.0, 25.0);
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3d p(coord(rng), coord(rng), 0.2 * coord(rng));
+    ASSERT_EQ(fresh.at(p, 0.2), shared.at(p, 0.2)) << i;
+    ASSERT_EQ(fresh.cell_of(p), shared.cell_of(p)) << i;
+    const Box3 box{p.cast<float>(), (p + Eigen::Vector3d(0.6, 0.6, 1.8)).cast<float>()};
+    ASSERT_EQ(fresh.in_box(box, 0.2), shared.in_box(box, 0.2)) << i;
+  }
+  EXPECT_EQ(fresh.nominal_column_step_rad(), shared.nominal_column_step_rad());
+
+  OrganizedScan turned = scan;
+  for (auto& az : turned.column_azimuth_rad) az += 0.001;
+  EXPECT_NE(cache.get(turned, m), geometry);
+  const OrganizedScan other_size(16, m.columns() - 1);
+  EXPECT_THROW(VisibilityQuery(other_size, geometry, pose), InputError);
+  EXPECT_THROW(VisibilityQuery(scan, nullptr, pose), InputError);
+}
+
 }  // namespace
 }  // namespace ringtrack::core
