@@ -81,46 +81,44 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
                      " column azimuths");
   }
   map_columns(scan);
-  const ReturnStatus* status = scan.statuses().data();
-  const float* range = scan.ranges().data();
-  const auto smoothing = static_cast<float>(config_.smoothing);
+  // The per-cell loop keeps everything it reads in locals: observe() is an out-of-line call,
+  // after which the compiler would otherwise reload the configuration and the vectors' data.
+  const float smoothing = static_cast<float>(config_.smoothing);
+  const double tolerance = config_.tolerance_m;
+  const double relative = config_.relative_tolerance;
+  const bool learn_open = config_.learn_no_return;
+  const int* column_bin = column_bin_.data();
   float* background = background_.data();
   std::uint16_t* streak = streak_.data();
   const int columns = scan.columns();
   for (int r = 0; r < rings_; ++r) {
     const std::size_t row = static_cast<std::size_t>(r) * static_cast<std::size_t>(bins_);
-    const std::size_t scan_row = scan.index(r, 0);
+    const ReturnStatus* status = scan.statuses().data() + scan.index(r, 0);
+    const float* range = scan.ranges().data() + scan.index(r, 0);
     for (int c = 0; c < columns; ++c) {
-      const int bin = column_bin_[static_cast<std::size_t>(c)];
+      const int bin = column_bin[c];
       if (bin < 0) continue;
-      const std::size_t i = scan_row + static_cast<std::size_t>(c);
       const std::size_t cell = row + static_cast<std::size_t>(bin);
-      switch (status[i]) {
-        case ReturnStatus::kValid: {
-          // Most returns agree with a learned finite background: that case inline (the same
-          // arithmetic as observe()), everything else in observe().
-          const float bg = background[cell];
-          const float x = range[i];
-          if (std::isfinite(bg) && same_surface(x, bg)) {
-            background[cell] = bg + smoothing * (x - bg);
-            streak[cell] = 0;
-          } else {
-            observe(cell, x);
-          }
-          break;
+      const ReturnStatus st = status[c];
+      if (st == ReturnStatus::kValid) {
+        // Most returns agree with a learned finite background: that case inline (same_surface
+        // and observe()'s arithmetic; false for an unlearned (NaN) or open (+inf) background),
+        // everything else in observe().
+        const float bg = background[cell];
+        const float x = range[c];
+        if (std::abs(x - bg) <= tolerance + relative * std::min(x, bg)) {
+          background[cell] = bg + smoothing * (x - bg);
+          streak[cell] = 0;
+        } else {
+          observe(cell, x);
         }
-        case ReturnStatus::kNoReturn:
-        case ReturnStatus::kTooFar:
-          if (!config_.learn_no_return) break;
-          if (background[cell] == kInf) {
-            streak[cell] = 0;  // open background seen open again (observe()'s first case)
-          } else {
-            observe(cell, kInf);
-          }
-          break;
-        case ReturnStatus::kTooClose:
-          break;  // no evidence either way
-      }
+      } else if (st != ReturnStatus::kTooClose && learn_open) {  // no return, or too far
+        if (background[cell] == kInf) {
+          streak[cell] = 0;  // open background seen open again (observe()'s first case)
+        } else {
+          observe(cell, kInf);
+        }
+      }  // a too-close return is no evidence either way
     }
   }
   ++scans_;
