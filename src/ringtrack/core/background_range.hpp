@@ -61,8 +61,8 @@ class BackgroundRangeModel : public SceneMemory {
  private:
   [[nodiscard]] int bin_of(double azimuth_rad) const;
   void map_columns(const OrganizedScan& scan);
-  /// Two finite ranges are one surface (within the tolerances). Inline: update() asks it for
-  /// nearly every cell of every scan.
+  /// Two finite ranges are one surface (within the tolerances). update()'s per-cell loop
+  /// repeats this test with the tolerances in locals (MatchesTheNaiveReferenceCellByCell).
   [[nodiscard]] bool same_surface(float a, float b) const {
     return std::abs(a - b) <= config_.tolerance_m + config_.relative_tolerance * std::min(a, b);
   }

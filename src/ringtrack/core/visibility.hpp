@@ -118,7 +118,8 @@ class BeamGeometryCache {
 
 /// Answers visibility questions about world points and boxes from one organized scan taken at a
 /// pose (sensor in world). Holds a reference to the scan, which must outlive the query.
-/// Construction is O(columns log columns); queries do not allocate (except cells_in_box's output).
+/// Construction is O(columns log columns), O(1) over a shared BeamGeometry; queries do not allocate
+/// (except cells_in_box's output).
 ///
 /// A moving sensor measures each column from where it was at that column's time. Given the
 /// sensor's motion (and the scan's column_stamp_ns), every beam starts from the sensor's pose at
