@@ -132,11 +132,18 @@ std::string table_row(const std::string& label, std::int64_t scans, const eval::
   return o.str();
 }
 
+// stopped_by: the signal that interrupted the benchmark after cases.size() of runs_planned runs
+// ("" when it ran them all).
 std::string report_markdown(const BenchmarkOptions& o, const std::vector<BenchmarkCase>& cases,
                             const std::vector<Aggregate>& groups, double wall_s,
-                            const std::string& config_text, bool plotted) {
+                            const std::string& config_text, bool plotted, std::size_t runs_planned,
+                            const std::string& stopped_by) {
   std::ostringstream md;
   md << "# ringtrack benchmark\n\n";
+  if (!stopped_by.empty()) {
+    md << "**Interrupted by " << stopped_by << " after " << cases.size() << " of " << runs_planned
+       << " runs: every figure below covers the finished runs only.**\n\n";
+  }
   md << "- date: " << utc_now() << "\n";
   md << "- machine: " << machine_description()
      << " (shared with other processes: times are "
@@ -412,14 +419,8 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   const std::vector<Aggregate> groups = experiment::group_cases(cases);
 
   const bool plotted = !o.no_plot && plot_stage_times(out / "timing.csv", out / "stage_times.png");
-  std::string report = report_markdown(o, cases, groups, wall_s, config_text, plotted);
-  if (!stopped_by.empty()) {
-    report.insert(report.find("\n\n") + 2,
-                  "**Interrupted by " + stopped_by + " after " + std::to_string(cases.size()) +
-                      " of " + std::to_string(runs.size()) +
-                      " runs: every figure below covers the finished runs only.**\n\n");
-  }
-  io::write_file(out / "report.md", report);
+  io::write_file(out / "report.md", report_markdown(o, cases, groups, wall_s, config_text, plotted,
+                                                    runs.size(), stopped_by));
 
   nlohmann::ordered_json j;
   j["ringtrack"] = kVersion;

@@ -412,6 +412,15 @@ bool wait_for_file(const fs::path& path, int polls) {
   return false;
 }
 
+// Sends `signal` to the child and waits for it (killing it when it does not end): its exit
+// code, or -1 when it did not end or did not exit normally.
+int exit_code_after(pid_t pid, int signal) {
+  ::kill(pid, signal);
+  int status = 0;
+  const bool ended = testing::wait_or_kill(pid, status);
+  return ended && WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
 // Starts `ringtrack <command> udp://127.0.0.1:PORT --out OUT <extra>`, sends it about six
 // revolutions of VLP-16 packets, waits for it to take them and sends `signal`.
 Stopped stop_live_command(const std::string& command, const std::string& out,
@@ -450,11 +459,8 @@ Stopped stop_live_command(const std::string& command, const std::string& out,
     ::close(fd);
     std::this_thread::sleep_for(500ms);  // let the tool take the scans (a few ms each)
   }
-  ::kill(pid, signal);
-  int status = 0;
-  const bool ended = testing::wait_or_kill(pid, status);
-  result.exited = ended && WIFEXITED(status);
-  result.exit_code = result.exited ? WEXITSTATUS(status) : -1;
+  result.exit_code = exit_code_after(pid, signal);
+  result.exited = result.exit_code >= 0;
   result.err = text_of(err_path);
   result.out = text_of(out_path);
   return result;
@@ -521,13 +527,7 @@ TEST(SimulateStopSignal, SigtermEndsWithACompleteShorterSequence) {
   ASSERT_GE(pid, 0);
   // Wait until the simulator has written a few scans, then stop it.
   wait_for_file(fs::path(out) / "scans" / io::scan_file_name(3), 500);
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  if (!testing::wait_or_kill(pid, status)) {
-    FAIL() << "simulate did not stop on SIGTERM";
-  }
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  ASSERT_EQ(exit_code_after(pid, SIGTERM), 0) << "simulate did not stop on SIGTERM with exit 0";
   const io::SequenceReader reader(out);  // sequence.yaml written: complete
   EXPECT_GE(reader.size(), 4u);
   EXPECT_LT(reader.size(), 36000u);
@@ -548,13 +548,7 @@ TEST(BenchmarkStopSignal, SigtermReportsTheFinishedRunsOnly) {
   ASSERT_GE(pid, 0);
   // The second run's table appears when the first run has finished.
   ASSERT_TRUE(wait_for_file(out / "tracks-1-moving.csv", 6000)) << "the first run never finished";
-  ::kill(pid, SIGTERM);
-  int status = 0;
-  if (!testing::wait_or_kill(pid, status)) {
-    FAIL() << "benchmark did not stop on SIGTERM";
-  }
-  ASSERT_TRUE(WIFEXITED(status));
-  EXPECT_EQ(WEXITSTATUS(status), 0);
+  ASSERT_EQ(exit_code_after(pid, SIGTERM), 0) << "benchmark did not stop on SIGTERM with exit 0";
   const auto j = run_json(out);
   EXPECT_EQ(j["complete"], true);
   EXPECT_EQ(j["interrupted"], "SIGTERM");
