@@ -48,31 +48,76 @@ VoxelMap::VoxelMap(double voxel_size_m, int max_points_per_voxel)
     : voxel_size_m_(voxel_size_m),
       inv_voxel_size_(static_cast<float>(1.0 / voxel_size_m)),
       edge_(Eigen::Vector3f::Constant(static_cast<float>(voxel_size_m))),
-      max_points_(static_cast<std::size_t>(max_points_per_voxel)) {}
+      max_points_(static_cast<std::size_t>(max_points_per_voxel)),
+      table_(kMinTableSlots) {}
 
 void VoxelMap::insert(const std::vector<Eigen::Vector3f>& points) {
   const auto size = static_cast<float>(voxel_size_m_);
   for (const auto& p : points) {
-    auto& voxel = voxels_[voxel_key(p, inv_voxel_size_)];
-    if (voxel.points.size() >= max_points_) continue;
-    if (voxel.points.empty()) {
-      voxel.points.reserve(max_points_);
+    auto& voxel = find_or_add(voxel_key(p, inv_voxel_size_));
+    if (voxel.size() >= max_points_) continue;
+    if (voxel.size() == 0) {
+      voxel.x.reserve(max_points_);
+      voxel.y.reserve(max_points_);
+      voxel.z.reserve(max_points_);
       const Eigen::Vector3f q = p * inv_voxel_size_;
-      voxel.corner = Eigen::Vector3f(std::floor(q.x()), std::floor(q.y()), std::floor(q.z())) * size;
+      voxel.corner =
+          Eigen::Vector3f(std::floor(q.x()), std::floor(q.y()), std::floor(q.z())) * size;
     }
-    voxel.points.push_back(p);
+    voxel.x.push_back(p.x());
+    voxel.y.push_back(p.y());
+    voxel.z.push_back(p.z());
   }
 }
 
 void VoxelMap::crop(const Eigen::Vector3f& center, double radius_m) {
   const float r2 = static_cast<float>(radius_m * radius_m);
-  std::erase_if(voxels_,
-                [&](const auto& kv) { return (kv.second.points.front() - center).squaredNorm() > r2; });
+  const std::size_t before = voxels_.size();
+  std::erase_if(voxels_, [&](const Voxel& v) { return (v.point(0) - center).squaredNorm() > r2; });
+  // Open addressing cannot simply drop a slot (later keys of its probe run would be lost), and
+  // a crop runs only after the sensor moved 5 % of the map radius: rebuilding is the simple way.
+  if (voxels_.size() != before) rebuild_table(voxels_.size());
 }
 
-const VoxelMap::Voxel* VoxelMap::find(int x, int y, int z) const {
-  const auto it = voxels_.find(pack_voxel(x, y, z));
-  return it == voxels_.end() ? nullptr : &it->second;
+void VoxelMap::clear() {
+  voxels_.clear();
+  rebuild_table(0);
+}
+
+const VoxelMap::Voxel* VoxelMap::find(VoxelKey key) const {
+  const std::size_t mask = table_.size() - 1;
+  for (std::size_t i = home_slot(key);; i = (i + 1) & mask) {
+    const Slot& slot = table_[i];
+    if (slot.key == key) return &voxels_[slot.index];
+    if (slot.key == kEmptyKey) return nullptr;
+  }
+}
+
+VoxelMap::Voxel& VoxelMap::find_or_add(VoxelKey key) {
+  if (2 * (voxels_.size() + 1) > table_.size()) rebuild_table(voxels_.size() + 1);
+  const std::size_t mask = table_.size() - 1;
+  for (std::size_t i = home_slot(key);; i = (i + 1) & mask) {
+    Slot& slot = table_[i];
+    if (slot.key == key) return voxels_[slot.index];
+    if (slot.key == kEmptyKey) {
+      slot = {key, static_cast<std::uint32_t>(voxels_.size())};
+      Voxel& voxel = voxels_.emplace_back();
+      voxel.key = key;
+      return voxel;
+    }
+  }
+}
+
+void VoxelMap::rebuild_table(std::size_t voxels) {
+  std::size_t slots = kMinTableSlots;
+  while (slots < 2 * voxels) slots *= 2;
+  table_.assign(slots, Slot{});
+  const std::size_t mask = slots - 1;
+  for (std::size_t v = 0; v < voxels_.size(); ++v) {
+    std::size_t i = home_slot(voxels_[v].key);
+    while (table_[i].key != kEmptyKey) i = (i + 1) & mask;
+    table_[i] = {voxels_[v].key, static_cast<std::uint32_t>(v)};
+  }
 }
 
 int VoxelMap::candidates(const Eigen::Vector3f& p, double max_distance_m,
@@ -111,7 +156,9 @@ bool VoxelMap::nearest(const Eigen::Vector3f& p, double max_distance_m,
   float best = static_cast<float>(max_distance_m * max_distance_m);
   bool found = false;
   for (int k = 0; k < n; ++k) {
-    for (const auto& q : voxels[static_cast<std::size_t>(k)]->points) {
+    const Voxel& voxel = *voxels[static_cast<std::size_t>(k)];
+    for (std::size_t j = 0; j < voxel.size(); ++j) {
+      const Eigen::Vector3f q = voxel.point(j);
       const float d2 = (q - p).squaredNorm();
       if (d2 <= best) {
         best = d2;
@@ -125,15 +172,15 @@ bool VoxelMap::nearest(const Eigen::Vector3f& p, double max_distance_m,
 
 std::size_t VoxelMap::point_count() const {
   std::size_t n = 0;
-  for (const auto& [key, voxel] : voxels_) n += voxel.points.size();
+  for (const auto& voxel : voxels_) n += voxel.size();
   return n;
 }
 
 std::vector<Eigen::Vector3f> VoxelMap::points() const {
   std::vector<Eigen::Vector3f> out;
   out.reserve(point_count());
-  for (const auto& [key, voxel] : voxels_) {
-    out.insert(out.end(), voxel.points.begin(), voxel.points.end());
+  for (const auto& voxel : voxels_) {
+    for (std::size_t j = 0; j < voxel.size(); ++j) out.push_back(voxel.point(j));
   }
   return out;
 }
@@ -149,6 +196,7 @@ constexpr float kSlackMarginM = 1e-5F;
 
 NeighbourCache::NeighbourCache(const VoxelMap& map, double max_distance_m, std::size_t points)
     : map_(&map),
+      distance2_(map.max_points_per_voxel()),
       max_distance_m_(max_distance_m),
       max2_(static_cast<float>(max_distance_m * max_distance_m)),
       reach_(kReachFactor * static_cast<float>(max_distance_m)),
@@ -183,20 +231,36 @@ void NeighbourCache::search(Slot& slot, const Eigen::Vector3f& q) {
   std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n),
             [](const auto& a, const auto& b) { return a.first < b.first; });
   float best = reach_ * reach_, second = best;
-  bool found = false;
+  const VoxelMap::Voxel* best_voxel = nullptr;
+  std::size_t best_point = 0;
+  float* __restrict dist2 = distance2_.data();
+  const float qx = q.x(), qy = q.y(), qz = q.z();
   for (std::size_t k = 0; k < n && order[k].first <= second; ++k) {
-    for (const auto& m : order[k].second->points) {
-      const float d2 = (m - q).squaredNorm();
-      if (d2 < best) {
+    const VoxelMap::Voxel& voxel = *order[k].second;
+    const std::size_t m = voxel.size();
+    const float* __restrict xs = voxel.x.data();
+    const float* __restrict ys = voxel.y.data();
+    const float* __restrict zs = voxel.z.data();
+    // The distances first, in a loop without branches (vectorised), then the two smallest.
+    // Summed as Eigen's squaredNorm() of a 3-vector sums, x + (y + z), so that the answer is
+    // bit for bit VoxelMap::nearest's.
+    for (std::size_t j = 0; j < m; ++j) {
+      const float dx = xs[j] - qx, dy = ys[j] - qy, dz = zs[j] - qz;
+      dist2[j] = dx * dx + (dy * dy + dz * dz);
+    }
+    for (std::size_t j = 0; j < m; ++j) {
+      if (dist2[j] < best) {
         second = best;
-        best = d2;
-        slot.nearest = m;
-        found = true;
-      } else if (d2 < second) {
-        second = d2;
+        best = dist2[j];
+        best_voxel = &voxel;
+        best_point = j;
+      } else if (dist2[j] < second) {
+        second = dist2[j];
       }
     }
   }
+  const bool found = best_voxel != nullptr;
+  if (found) slot.nearest = best_voxel->point(best_point);
   slot.anchor = q;
   const float d1 = std::sqrt(best), d2 = std::sqrt(second);
   // Found: the nearest stays nearest while q moves less than half the gap to the runner-up (or

@@ -5,7 +5,6 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
-#include <unordered_map>
 #include <vector>
 
 namespace ringtrack::odometry {
@@ -59,10 +58,17 @@ class VoxelKeySet {
 /// The local map: world-frame points in voxels of edge voxel_size_m, at most max_points each.
 class VoxelMap {
  public:
-  /// Points of one voxel, in insertion order, and the voxel's lowest corner.
+  /// Points of one voxel, in insertion order, and the voxel's lowest corner. The coordinates
+  /// are kept as three arrays: the neighbour search computes a voxel's distances in one loop
+  /// the compiler vectorises (docs/odometry.md, "Speed").
   struct Voxel {
     Eigen::Vector3f corner{Eigen::Vector3f::Zero()};
-    std::vector<Eigen::Vector3f> points;
+    std::vector<float> x, y, z;
+    VoxelKey key{0};  ///< its key (the table is rebuilt from the voxels after a crop)
+    /// Number of points.
+    [[nodiscard]] std::size_t size() const { return x.size(); }
+    /// Point j.
+    [[nodiscard]] Eigen::Vector3f point(std::size_t j) const { return {x[j], y[j], z[j]}; }
   };
   /// Squared distance from p to the voxel's cube (0 inside): a search skips voxels no nearer
   /// than the best point found so far.
@@ -78,7 +84,7 @@ class VoxelMap {
   /// Drops every voxel whose first point lies farther than radius_m from center.
   void crop(const Eigen::Vector3f& center, double radius_m);
   /// Removes every point.
-  void clear() { voxels_.clear(); }
+  void clear();
 
   /// The voxels to search for the neighbour of p within max_distance_m (<= voxel size): the 2x2x2
   /// block around p when max_distance_m <= half a voxel, else the 3x3x3 block. Returns how many
@@ -91,6 +97,8 @@ class VoxelMap {
   bool nearest(const Eigen::Vector3f& p, double max_distance_m, Eigen::Vector3f& out) const;
 
   [[nodiscard]] double voxel_size_m() const { return voxel_size_m_; }
+  /// Points kept per voxel at most.
+  [[nodiscard]] std::size_t max_points_per_voxel() const { return max_points_; }
   [[nodiscard]] std::size_t voxel_count() const { return voxels_.size(); }
   /// Number of points in the map.
   [[nodiscard]] std::size_t point_count() const;
@@ -98,21 +106,35 @@ class VoxelMap {
   [[nodiscard]] std::vector<Eigen::Vector3f> points() const;
 
  private:
-  struct KeyHash {
-    std::size_t operator()(VoxelKey k) const {
-      k ^= k >> 33U;  // splitmix-style finaliser: neighbouring voxels land far apart
-      k *= 0xff51afd7ed558ccdULL;
-      k ^= k >> 33U;
-      return static_cast<std::size_t>(k);
-    }
+  // One slot of the open-addressing table (linear probing, load <= 1/2): the key and the
+  // voxel's index in voxels_. A std::unordered_map's node per voxel cost a pointer chase and a
+  // cache miss per lookup, and the search looks up 8 voxels per query point (docs/odometry.md,
+  // "Speed").
+  struct Slot {
+    VoxelKey key{kEmptyKey};
+    std::uint32_t index{0};
   };
-  const Voxel* find(int x, int y, int z) const;
+  static constexpr VoxelKey kEmptyKey = ~VoxelKey{0};  // pack_voxel never makes it (63 bits)
+  static constexpr std::size_t kMinTableSlots = 64;
+  [[nodiscard]] std::size_t home_slot(VoxelKey key) const {
+    key ^= key >> 33U;  // splitmix-style finaliser: neighbouring voxels land far apart
+    key *= 0xff51afd7ed558ccdULL;
+    key ^= key >> 33U;
+    return static_cast<std::size_t>(key) & (table_.size() - 1);
+  }
+  [[nodiscard]] const Voxel* find(VoxelKey key) const;
+  const Voxel* find(int x, int y, int z) const { return find(pack_voxel(x, y, z)); }
+  // The voxel of key, created (empty) when missing.
+  Voxel& find_or_add(VoxelKey key);
+  // Rebuilds table_ from voxels_ with room for at least `voxels` at load <= 1/2.
+  void rebuild_table(std::size_t voxels);
 
   double voxel_size_m_;
   float inv_voxel_size_;
   Eigen::Vector3f edge_;
   std::size_t max_points_;
-  std::unordered_map<VoxelKey, Voxel, KeyHash> voxels_;
+  std::vector<Voxel> voxels_;  // dense, in creation order (crop keeps the order)
+  std::vector<Slot> table_;    // a power of two in size
 };
 
 /// Nearest map points of a fixed list of query points that move a little between calls (the
@@ -145,6 +167,7 @@ class NeighbourCache {
   void search(Slot& slot, const Eigen::Vector3f& q);
 
   const VoxelMap* map_;
+  std::vector<float> distance2_;  // scratch: squared distances to one voxel's points
   double max_distance_m_;
   float max2_, reach_;
   std::vector<Slot> slots_;
