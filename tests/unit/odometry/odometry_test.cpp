@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <random>
 
@@ -147,7 +148,7 @@ TEST(NeighbourCache, SwitchesAtTheBisectorAndDropsBeyondTheDistance) {
   EXPECT_TRUE(cache.nearest(0, {0.6F, 0.5F, 0.79F}, found));   // 0.29 m above the second
   EXPECT_FALSE(cache.nearest(0, {0.6F, 0.5F, 0.81F}, found));  // 0.31 m: beyond
   EXPECT_FALSE(cache.nearest(0, {0.6F, 0.5F, 0.95F}, found));
-  EXPECT_TRUE(cache.nearest(0, {0.6F, 0.5F, 0.6F}, found));    // back within
+  EXPECT_TRUE(cache.nearest(0, {0.6F, 0.5F, 0.6F}, found));  // back within
   EXPECT_FLOAT_EQ(found.z(), 0.5F);
 }
 
@@ -162,6 +163,49 @@ TEST(VoxelMap, KeepsAtMostMaxPointsPerVoxelAndCropsFarVoxels) {
   map.crop(Eigen::Vector3f::Zero(), 10.0);
   EXPECT_EQ(map.voxel_count(), 1U);
   EXPECT_EQ(map.point_count(), 3U);
+}
+
+// The voxel table grows (thousands of voxels from a 64-slot start), is rebuilt by a crop and
+// grows again: every lookup must still find what brute force finds among the points kept, and
+// a crop must drop exactly the voxels whose first point lies beyond the radius.
+TEST(VoxelMap, LookupsStayExactThroughGrowthCropAndRegrowth) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(-30.0F, 30.0F);
+  std::vector<Eigen::Vector3f> first(6000), second(6000);
+  for (auto& p : first) p = {u(rng), u(rng), 0.2F * u(rng)};
+  for (auto& p : second) p = {u(rng), u(rng), 0.2F * u(rng)};
+  odometry::VoxelMap map(1.0, 1000);
+  map.insert(first);
+  const std::size_t voxels_before = map.voxel_count();
+  map.crop(Eigen::Vector3f::Zero(), 20.0);
+  // Reference: the voxels (by integer coordinates) whose first point is within 20 m.
+  std::map<std::array<int, 3>, Eigen::Vector3f> first_point;
+  for (const auto& p : first) {
+    first_point.try_emplace({odometry::floor_to_int(p.x()), odometry::floor_to_int(p.y()),
+                             odometry::floor_to_int(p.z())},
+                            p);
+  }
+  std::vector<Eigen::Vector3f> kept;
+  for (const auto& p : first) {
+    const auto& head = first_point.at({odometry::floor_to_int(p.x()), odometry::floor_to_int(p.y()),
+                                       odometry::floor_to_int(p.z())});
+    if (head.norm() <= 20.0F) kept.push_back(p);
+  }
+  EXPECT_LT(map.voxel_count(), voxels_before);
+  EXPECT_EQ(map.point_count(), kept.size());
+  map.insert(second);
+  kept.insert(kept.end(), second.begin(), second.end());
+  EXPECT_EQ(map.point_count(), kept.size());
+  for (int k = 0; k < 400; ++k) {
+    const Eigen::Vector3f q{u(rng), u(rng), 0.2F * u(rng)};
+    float best = 0;
+    const bool expected = brute_nearest(kept, q, 0.5, best);
+    Eigen::Vector3f found;
+    ASSERT_EQ(map.nearest(q, 0.5, found), expected) << k;
+    if (expected) {
+      EXPECT_FLOAT_EQ((found - q).norm(), best) << k;
+    }
+  }
 }
 
 TEST(VoxelKeySet, InsertsEachKeyOnce) {
@@ -216,7 +260,8 @@ TEST(Registration, RecoversKnownRigidMotionsOfTheSamePoints) {
     truth.translation() = m.t;
     // Sensor points seen from pose `truth` of the same world points.
     std::vector<Eigen::Vector3f> moved;
-    for (const auto& p : source) moved.push_back((truth.inverse() * p.cast<double>()).cast<float>());
+    for (const auto& p : source)
+      moved.push_back((truth.inverse() * p.cast<double>()).cast<float>());
     odometry::IcpSettings settings;
     settings.max_distance_m = 1.0;
     settings.kernel_scale_m = 0.5;
@@ -242,8 +287,8 @@ TEST(OdometryDeskew, UndoesExactPerColumnMotion) {
   // The sensor moves by `motion` every 0.1 s: the column at time t measured its points in the
   // frame scale(motion, t / 0.1 s), i.e. p_column = scale^-1 * p_reference.
   Eigen::Isometry3d motion = Eigen::Isometry3d::Identity();
-  motion.linear() = Eigen::AngleAxisd(6 * kDeg, Eigen::Vector3d(0.1, 0.2, 1).normalized())
-                        .toRotationMatrix();
+  motion.linear() =
+      Eigen::AngleAxisd(6 * kDeg, Eigen::Vector3d(0.1, 0.2, 1).normalized()).toRotationMatrix();
   motion.translation() = Eigen::Vector3d(0.8, -0.3, 0.05);
   for (int c = 0; c < scan.columns(); ++c) {
     const double s = 1e-9 * static_cast<double>(scan.column_stamp_ns[c] - scan.stamp_ns) / 0.1;
@@ -288,8 +333,9 @@ struct TwoScanCase {
 // Different poses sample the world at different points: point-to-point ICP against a map of
 // one scan recovers the motion within centimetres (the map's point spacing limits it).
 TEST(Odometry, RecoversTheMotionBetweenTwoScansOfAStructuredScene) {
-  for (const auto& c : {TwoScanCase{{0.5, 0.2, 2.5}, {0, 0, 3}}, TwoScanCase{{0.0, 0.0, 2.5}, {0, 0, 0}},
-                        TwoScanCase{{-0.4, 0.6, 2.6}, {1, -1, -2}}}) {
+  for (const auto& c :
+       {TwoScanCase{{0.5, 0.2, 2.5}, {0, 0, 3}}, TwoScanCase{{0.0, 0.0, 2.5}, {0, 0, 0}},
+        TwoScanCase{{-0.4, 0.6, 2.6}, {1, -1, -2}}}) {
     auto a = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
     auto b = simulate_at("4", c.xyz, c.rpy_deg);
     b.scan.stamp_ns = a.scan.stamp_ns + 100'000'000;
