@@ -24,6 +24,7 @@
 #include "support/ouster_encoder.hpp"
 #include "support/rosbag_writers.hpp"
 #include "support/velodyne_encoder.hpp"
+#include "support/zstd_util.hpp"
 
 namespace ringtrack::fuzz {
 namespace {
@@ -39,7 +40,8 @@ Bytes read_bytes(const fs::path& path) {
 void put(const fs::path& dir, const std::string& name, const Bytes& bytes) {
   fs::create_directories(dir);
   std::ofstream out(dir / name, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
 }
 
 void put(const fs::path& dir, const std::string& name, const std::string& text) {
@@ -52,7 +54,9 @@ Bytes concat(std::initializer_list<std::span<const std::uint8_t>> parts) {
   return out;
 }
 
-Bytes as_bytes(const std::string& s) { return {s.begin(), s.end()}; }
+Bytes as_bytes(const std::string& s) {
+  return {s.begin(), s.end()};
+}
 
 Bytes u16_le(std::size_t v) {
   return {static_cast<std::uint8_t>(v & 0xFF), static_cast<std::uint8_t>((v >> 8) & 0xFF)};
@@ -119,18 +123,17 @@ void sensor_pcap_seeds(const fs::path& out, const fs::path& scratch) {
   frames.clear();
   Bytes decoder_input{0x05, 0x00};  // fuzz_ouster_decoder: RNG19 single return, 16 beams, no text
   for (int packet = 0; packet < 3; ++packet) {
-    const auto bytes = test::encode_ouster_packet(
-        options, packet * 16, stamp, [](int m, int beam) {
-          return test::OusterEcho{static_cast<std::uint32_t>(3000 + 10 * (m + beam)), 0, 50};
-        });
+    const auto bytes = test::encode_ouster_packet(options, packet * 16, stamp, [](int m, int beam) {
+      return test::OusterEcho{static_cast<std::uint32_t>(3000 + 10 * (m + beam)), 0, 50};
+    });
     frames.push_back(test::udp_frame(test::PcapLink::kEthernet, bytes, 7502, stamp += 1'600'000));
     decoder_input.push_back(0x00);  // the metadata's packet size
     decoder_input.insert(decoder_input.end(), bytes.begin(), bytes.end());
   }
   put(out / "fuzz_ouster_decoder", "rng19_three_packets", decoder_input);
   put(out / "fuzz_sensor_pcap", "ouster_rng19_raw",
-      concat({Bytes{0x03}, u16_le(metadata.size()), as_bytes(metadata),
-              pcap_bytes(frames, scratch)}));
+      concat(
+          {Bytes{0x03}, u16_le(metadata.size()), as_bytes(metadata), pcap_bytes(frames, scratch)}));
 }
 
 test::TestPointCloud2 small_cloud(bool with_ring) {
@@ -152,14 +155,15 @@ test::TestPointCloud2 small_cloud(bool with_ring) {
 test::TestVelodyneScan velodyne_scan_message(int packets) {
   test::TestVelodyneScan scan;
   scan.stamp_ns = 1'700'000'000'000'000'000;
-  for (const auto& p : velodyne_packets(packets)) scan.packets.push_back({p.host_stamp_ns, p.payload});
+  for (const auto& p : velodyne_packets(packets))
+    scan.packets.push_back({p.host_stamp_ns, p.payload});
   return scan;
 }
 
 void ros_message_seeds(const fs::path& out) {
   const fs::path dir = out / "fuzz_ros_messages";
-  for (const auto [encoding, bit] : {std::pair{test::RosEncoding::kRos1, 0},
-                                     std::pair{test::RosEncoding::kCdr, 1}}) {
+  for (const auto [encoding, bit] :
+       {std::pair{test::RosEncoding::kRos1, 0}, std::pair{test::RosEncoding::kCdr, 1}}) {
     const std::string suffix = bit != 0 ? "_cdr" : "_ros1";
     const auto b = static_cast<std::uint8_t>(bit);
     put(dir, "velodyne_scan" + suffix,
@@ -178,27 +182,27 @@ void rosbag_seeds(const fs::path& out, const fs::path& scratch) {
   for (const std::string compression : {"none", "bz2", "lz4"}) {
     for (const bool indexed : {true, false}) {
       const fs::path path = scratch / "seed.bag";
-      test::write_rosbag1(
-          path, {{"/velodyne_packets", "velodyne_msgs/VelodyneScan"}},
-          test::velodyne_scan_messages(packets, 0, test::RosEncoding::kRos1, 2),
-          {.compression = compression, .chunk_bytes = 2048, .indexed = indexed});
+      test::write_rosbag1(path, {{"/velodyne_packets", "velodyne_msgs/VelodyneScan"}},
+                          test::velodyne_scan_messages(packets, 0, test::RosEncoding::kRos1, 2),
+                          {.compression = compression, .chunk_bytes = 2048, .indexed = indexed});
       put(out / "fuzz_rosbag1", "velodyne_" + compression + (indexed ? "" : "_unindexed"),
           read_bytes(path));
     }
   }
   const fs::path cloud_bag = scratch / "cloud.bag";
-  test::write_rosbag1(cloud_bag,
-                      {{"/points", "sensor_msgs/PointCloud2"}, {"/chatter", "std_msgs/String"}},
-                      {{1, 5, test::serialize_string("hello", test::RosEncoding::kRos1)},
-                       {0, 10, test::serialize_pointcloud2(small_cloud(true),
-                                                           test::RosEncoding::kRos1)}},
-                      {.compression = "lz4"});
+  test::write_rosbag1(
+      cloud_bag, {{"/points", "sensor_msgs/PointCloud2"}, {"/chatter", "std_msgs/String"}},
+      {{1, 5, test::serialize_string("hello", test::RosEncoding::kRos1)},
+       {0, 10, test::serialize_pointcloud2(small_cloud(true), test::RosEncoding::kRos1)}},
+      {.compression = "lz4"});
   put(out / "fuzz_rosbag1", "pointcloud2_lz4", read_bytes(cloud_bag));
 
   const fs::path folder = scratch / "bag2";
   write_small_rosbag2(folder);
   put(out / "fuzz_rosbag2", "velodyne_db3", read_bytes(folder / "bag2_0.db3"));
   put(out / "fuzz_rosbag2", "metadata_yaml", read_bytes(folder / "metadata.yaml"));
+  const auto db3 = read_bytes(folder / "bag2_0.db3");
+  put(out / "fuzz_rosbag2", "velodyne_db3_zstd", test::zstd_compress(db3));
 }
 
 // fuzz_mcap_reader (its harness: control byte 0 = the raw file, with its summary): ROS 2 MCAP
@@ -244,8 +248,8 @@ void pcd_seeds(const fs::path& out) {
       labels[static_cast<std::size_t>(ring) * 16 + c] = static_cast<std::uint32_t>(c % 3);
     }
   }
-  for (const auto encoding : {io::PcdEncoding::kAscii, io::PcdEncoding::kBinary,
-                              io::PcdEncoding::kBinaryCompressed}) {
+  for (const auto encoding :
+       {io::PcdEncoding::kAscii, io::PcdEncoding::kBinary, io::PcdEncoding::kBinaryCompressed}) {
     const std::string name(io::to_string(encoding));
     put(out / "fuzz_pcd", name, io::encode_pcd(scan, labels, encoding));
     put(out / "fuzz_pcd", name + "_nolabels", io::encode_pcd(scan, {}, encoding));
@@ -279,8 +283,7 @@ void kitti_bin_seeds(const fs::path& out) {
 void text_seeds(const fs::path& out, const fs::path& source_dir) {
   const fs::path config = out / "fuzz_config";
   put(config, "defaults", core::dump_config(core::Config{}));
-  put(config, "override",
-      "segmentation:\n  max_width_m: 1.5\ntracking:\n  confirm_hits: 3\n");
+  put(config, "override", "segmentation:\n  max_width_m: 1.5\ntracking:\n  confirm_hits: 3\n");
   put(config, "assignments", "segmentation.max_width_m=1.5\nmapping.voxel_size_m=0.2\n");
   put(config, "sequence",
       io::format_sequence_yaml(io::SequenceMeta{.columns = 1800, .scans = 12, .name = "seed"}));
@@ -302,8 +305,7 @@ void text_seeds(const fs::path& out, const fs::path& source_dir) {
     tum += io::format_tum_line(pose) + "\n";
   }
   put(tables, "tum", "# t x y z qx qy qz qw\n" + tum);
-  put(tables, "kitti",
-      "1 0 0 0 0 1 0 0 0 0 1 0\n0.995 -0.0998 0 0.5 0.0998 0.995 0 0.1 0 0 1 0\n");
+  put(tables, "kitti", "1 0 0 0 0 1 0 0 0 0 1 0\n0.995 -0.0998 0 0.5 0.0998 0.995 0 0.1 0 0 1 0\n");
   put(tables, "stamps", "# stamps\n0.0\n0.1\n0.200000001\n");
   io::ObjectRow object;
   object.scan = 1;
@@ -337,8 +339,9 @@ void text_seeds(const fs::path& out, const fs::path& source_dir) {
 
 void write_small_rosbag2(const std::filesystem::path& folder) {
   std::filesystem::remove_all(folder);
-  test::write_rosbag2(folder, {{"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"}},
-                      test::velodyne_scan_messages(velodyne_packets(4), 0, test::RosEncoding::kCdr, 2));
+  test::write_rosbag2(
+      folder, {{"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"}},
+      test::velodyne_scan_messages(velodyne_packets(4), 0, test::RosEncoding::kCdr, 2));
 }
 
 void write_all_seeds(const std::filesystem::path& out, const std::filesystem::path& source_dir) {

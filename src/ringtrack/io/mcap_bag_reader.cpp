@@ -1,61 +1,17 @@
 #include "ringtrack/io/mcap_bag_reader.hpp"
 
-#include <yaml-cpp/yaml.h>
-
 #include <algorithm>
+#include <optional>
 #include <set>
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/paths.hpp"
+#include "ringtrack/io/rosbag2_metadata.hpp"
 
 namespace ringtrack::io {
 namespace {
 
 namespace fs = std::filesystem;
-
-// The storage a rosbag2 metadata.yaml names ("sqlite3" when it names none: the old default).
-std::string metadata_storage(const fs::path& metadata) {
-  try {
-    const YAML::Node info = YAML::LoadFile(metadata.string())["rosbag2_bagfile_information"];
-    if (!info || !info.IsMap()) return "";
-    return info["storage_identifier"].as<std::string>("sqlite3");
-  } catch (const YAML::Exception&) {
-    return "";  // the sqlite3 reader reports the malformed file
-  }
-}
-
-// The .mcap files a bag folder's metadata.yaml lists; compressed bags are rejected.
-std::vector<fs::path> files_from_metadata(const fs::path& folder) {
-  const fs::path metadata = folder / "metadata.yaml";
-  const std::string name = metadata.string();
-  try {
-    const YAML::Node info = YAML::LoadFile(name)["rosbag2_bagfile_information"];
-    if (!info || !info.IsMap()) {
-      throw core::InputError(name + ": expected a rosbag2_bagfile_information map");
-    }
-    const std::string compression = info["compression_format"].as<std::string>("");
-    if (!compression.empty()) {
-      throw core::InputError(name + ": bags compressed by rosbag2 (" + compression +
-                             ", per file or per message) are not supported; decompress with `ros2 "
-                             "bag convert` (MCAP chunk compression is supported)");
-    }
-    const YAML::Node paths = info["relative_file_paths"];
-    if (!paths || !paths.IsSequence() || paths.size() == 0) {
-      throw core::InputError(name + ": expected relative_file_paths to list the .mcap files");
-    }
-    std::vector<fs::path> files;
-    for (const auto& node : paths) {
-      const fs::path file = folder / node.as<std::string>();
-      if (!is_file(file)) {
-        throw core::InputError(name + ": lists " + node.as<std::string>() + ", which is missing");
-      }
-      files.push_back(file);
-    }
-    return files;
-  } catch (const YAML::Exception& e) {
-    throw core::InputError(name + ": not valid rosbag2 metadata (" + e.what() + ")");
-  }
-}
 
 std::vector<fs::path> mcap_files_in(const fs::path& folder) {
   std::vector<fs::path> files;
@@ -79,7 +35,7 @@ bool is_mcap_bag(const fs::path& path) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
     if (fs::exists(path / "metadata.yaml", ec))
-      return metadata_storage(path / "metadata.yaml") == "mcap";
+      return rosbag2_storage(path / "metadata.yaml") == "mcap";
     return !mcap_files_in(path).empty();
   }
   return is_mcap_file(path);
@@ -88,12 +44,15 @@ bool is_mcap_bag(const fs::path& path) {
 struct McapBagReader::Impl {
   fs::path path;
   std::vector<fs::path> files;
+  Rosbag2Compression compression{Rosbag2Compression::kNone};
+  std::optional<TemporaryFolder> expanded;  // file-compressed bags: the .mcap files expanded
   std::vector<std::unique_ptr<McapReader>> readers;
   std::vector<RosbagTopicInfo> topics;
   std::string selected;
   std::size_t file_index{0};
-  std::set<std::uint16_t> wanted;  // channel ids of the selected topic in the current file
-  std::size_t known_channels{0};   // channels of the current file when `wanted` was made
+  std::set<std::uint16_t> wanted;     // channel ids of the selected topic in the current file
+  std::size_t known_channels{0};      // channels of the current file when `wanted` was made
+  std::vector<std::uint8_t> message;  // the selected message expanded (per-message compression)
   std::uint64_t index{0};
   std::uint64_t other{0};
   bool started{false};
@@ -119,13 +78,28 @@ McapBagReader::McapBagReader(const fs::path& path) : impl_(std::make_unique<Impl
   Impl& m = *impl_;
   m.path = path;
   if (is_folder(path)) {
-    m.files = is_file(path / "metadata.yaml") ? files_from_metadata(path) : mcap_files_in(path);
+    if (is_file(path / "metadata.yaml")) {
+      Rosbag2Metadata metadata = read_rosbag2_metadata(path, "mcap");
+      m.files = std::move(metadata.files);
+      m.compression = metadata.compression;
+    } else {
+      m.files = mcap_files_in(path);
+    }
     if (m.files.empty()) throw core::InputError(path.string() + ": no .mcap files in the folder");
   } else {
     m.files.push_back(path);
   }
+  // Each listed "x.mcap.zstd" of a file-compressed bag is expanded to a temporary "x.mcap"
+  // (removed with the reader); messages still name the listed file.
+  if (m.compression == Rosbag2Compression::kFile) m.expanded.emplace("rosbag2-mcap");
   for (const auto& file : m.files) {
-    m.readers.push_back(std::make_unique<McapReader>(file));
+    if (m.expanded) {
+      const fs::path storage = m.expanded->path() / file.stem();
+      decompress_zstd_file(file, storage);
+      m.readers.push_back(std::make_unique<McapReader>(storage, file.string()));
+    } else {
+      m.readers.push_back(std::make_unique<McapReader>(file));
+    }
     const McapReader& r = *m.readers.back();
     for (const auto& c : r.channels()) {
       const McapSchema* schema = r.schema(c.schema_id);
@@ -181,8 +155,15 @@ bool McapBagReader::next(RosbagMessage& out) {
         }
       }
       out.stamp_ns = static_cast<std::int64_t>(message.log_time_ns);
-      out.data = message.data;
       out.index = ++m.index;
+      if (m.compression == Rosbag2Compression::kMessage) {
+        decompress_zstd_message(
+            message.data, m.message,
+            r.name() + ": message " + std::to_string(out.index) + " of " + m.selected);
+        out.data = m.message;
+      } else {
+        out.data = message.data;
+      }
       return true;
     }
     if (!r.warning().empty()) m.warnings += (m.warnings.empty() ? "" : "; ") + r.warning();

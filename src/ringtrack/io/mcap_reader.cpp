@@ -90,7 +90,7 @@ class Source {
 
 class FileSource final : public Source {
  public:
-  explicit FileSource(const std::filesystem::path& path) : name_(path.string()) {
+  FileSource(const std::filesystem::path& path, std::string name) : name_(std::move(name)) {
     fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
     if (fd_ < 0) throw core::InputError(name_ + ": cannot open: " + std::strerror(errno));
     const off_t end = ::lseek(fd_, 0, SEEK_END);
@@ -593,10 +593,14 @@ struct McapReader::Impl {
 };
 
 McapReader::McapReader(const std::filesystem::path& path, McapReaderOptions options)
+    : McapReader(path, path.string(), options) {}
+
+McapReader::McapReader(const std::filesystem::path& path, std::string name,
+                       McapReaderOptions options)
     : impl_(std::make_unique<Impl>()) {
-  impl_->name = path.string();
+  impl_->name = std::move(name);
   impl_->options = options;
-  impl_->source = std::make_unique<FileSource>(path);
+  impl_->source = std::make_unique<FileSource>(path, impl_->name);
   impl_->open();
 }
 

@@ -80,6 +80,9 @@ class McapReader {
   /// Opens a file: checks the magic, reads the summary when there is one, or else scans the file
   /// once for its channels and message counts.
   explicit McapReader(const std::filesystem::path& path, McapReaderOptions options = {});
+  /// Reads the file at path, naming it `name` in messages (an expanded temporary copy named
+  /// after the file the user has).
+  McapReader(const std::filesystem::path& path, std::string name, McapReaderOptions options = {});
   /// The same over bytes in memory (kept by the caller while the reader lives); `name` is used in
   /// messages.
   McapReader(std::span<const std::uint8_t> bytes, std::string name, McapReaderOptions options = {});

@@ -1,13 +1,14 @@
 #include "ringtrack/io/rosbag2_reader.hpp"
 
 #include <sqlite3.h>
-#include <yaml-cpp/yaml.h>
 
 #include <algorithm>
 #include <map>
+#include <optional>
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/paths.hpp"
+#include "ringtrack/io/rosbag2_metadata.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -71,11 +72,13 @@ struct DbFile {
   }
 };
 
-DbFile open_db(const fs::path& path) {
+// Opens storage (a .db3 file, or the expanded copy of a file-compressed one); messages name
+// `path`, the file the user has.
+DbFile open_db(const fs::path& storage, const fs::path& path) {
   DbFile file;
   file.path = path;
   sqlite3* db = nullptr;
-  const int rc = sqlite3_open_v2(sqlite_uri(path).c_str(), &db,
+  const int rc = sqlite3_open_v2(sqlite_uri(storage).c_str(), &db,
                                  SQLITE_OPEN_READONLY | SQLITE_OPEN_URI, nullptr);
   file.db.reset(db);
   if (rc != SQLITE_OK) {
@@ -116,53 +119,6 @@ DbFile open_db(const fs::path& path) {
   return file;
 }
 
-std::vector<fs::path> files_from_metadata(const fs::path& folder) {
-  const fs::path metadata = folder / "metadata.yaml";
-  const std::string name = metadata.string();
-  YAML::Node info;
-  try {
-    info = YAML::LoadFile(name)["rosbag2_bagfile_information"];
-  } catch (const YAML::Exception& e) {
-    throw core::InputError(name + ": not valid YAML (" + e.what() + ")");
-  }
-  if (!info || !info.IsMap()) {
-    throw core::InputError(name + ": expected a rosbag2_bagfile_information map");
-  }
-  try {
-    const std::string storage = info["storage_identifier"].as<std::string>("sqlite3");
-    if (storage != "sqlite3") {
-      throw core::InputError(name + ": storage '" + storage +
-                             "' is not supported, expected sqlite3 (convert with `ros2 bag "
-                             "convert` to sqlite3)");
-    }
-    const std::string compression = info["compression_format"].as<std::string>("");
-    if (!compression.empty()) {
-      throw core::InputError(name + ": compressed bags (" + compression +
-                             ") are not supported; decompress with `ros2 bag convert`");
-    }
-    const YAML::Node paths = info["relative_file_paths"];
-    if (!paths || !paths.IsSequence() || paths.size() == 0) {
-      throw core::InputError(name + ": expected relative_file_paths to list the .db3 files");
-    }
-    std::vector<fs::path> files;
-    for (const auto& node : paths) {
-      const fs::path relative(node.as<std::string>());
-      // rosbag2 before Foxy listed paths relative to the bag's parent folder.
-      fs::path file = folder / relative;
-      if (!is_file(file) && is_file(folder.parent_path() / relative)) {
-        file = folder.parent_path() / relative;
-      }
-      if (!is_file(file)) {
-        throw core::InputError(name + ": lists " + relative.string() + ", which is missing");
-      }
-      files.push_back(file);
-    }
-    return files;
-  } catch (const YAML::Exception& e) {
-    throw core::InputError(name + ": unexpected value (" + e.what() + ")");
-  }
-}
-
 std::string list_topics(const std::vector<RosbagTopicInfo>& topics) {
   std::string s;
   for (const auto& t : topics) s += (s.empty() ? "" : ", ") + t.name + " (" + t.type + ")";
@@ -174,7 +130,9 @@ std::string list_topics(const std::vector<RosbagTopicInfo>& topics) {
 struct Rosbag2Reader::Impl {
   fs::path path;
   std::vector<fs::path> files;
-  std::vector<DbFile> dbs;  // every file stays open: split bags are few files
+  Rosbag2Compression compression{Rosbag2Compression::kNone};
+  std::optional<TemporaryFolder> expanded;  // file-compressed bags: the .db3 files expanded
+  std::vector<DbFile> dbs;                  // every file stays open: split bags are few files
   std::vector<RosbagTopicInfo> topics;
   std::string selected;
   std::size_t file_index{0};
@@ -215,7 +173,9 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : impl_(std::make_unique<Impl
   const std::string name = path.string();
   if (is_folder(path)) {
     if (is_file(path / "metadata.yaml")) {
-      m.files = files_from_metadata(path);
+      Rosbag2Metadata metadata = read_rosbag2_metadata(path, "sqlite3");
+      m.files = std::move(metadata.files);
+      m.compression = metadata.compression;
     } else {
       std::error_code ec;
       for (const auto& entry : fs::directory_iterator(path, ec)) {
@@ -232,7 +192,18 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : impl_(std::make_unique<Impl
   } else {
     throw core::InputError(name + ": no such rosbag2 folder or .db3 file");
   }
-  for (const auto& file : m.files) m.dbs.push_back(open_db(file));
+  if (m.compression == Rosbag2Compression::kFile) {
+    // sqlite reads files only: each listed "x.db3.zstd" is expanded to a temporary "x.db3",
+    // removed with the reader (the disk needs room for the expanded bag).
+    m.expanded.emplace("rosbag2");
+    for (const auto& file : m.files) {
+      const fs::path storage = m.expanded->path() / file.stem();
+      decompress_zstd_file(file, storage);
+      m.dbs.push_back(open_db(storage, file));
+    }
+  } else {
+    for (const auto& file : m.files) m.dbs.push_back(open_db(file, file));
+  }
   // Topics by name over every file (ids differ between the files of a split bag).
   for (const auto& file : m.dbs) {
     for (const auto& t : file.topics) {
@@ -280,7 +251,13 @@ bool Rosbag2Reader::next(RosbagMessage& out) {
     if (step == SQLITE_ROW) {
       const auto* blob = static_cast<const std::uint8_t*>(sqlite3_column_blob(m.stmt.get(), 1));
       const auto size = static_cast<std::size_t>(sqlite3_column_bytes(m.stmt.get(), 1));
-      m.message.assign(blob, blob + size);
+      if (m.compression == Rosbag2Compression::kMessage) {
+        decompress_zstd_message({blob, size}, m.message,
+                                m.dbs[m.file_index - 1].path.string() + ": message " +
+                                    std::to_string(m.index + 1) + " of " + m.selected);
+      } else {
+        m.message.assign(blob, blob + size);
+      }
       out.stamp_ns = sqlite3_column_int64(m.stmt.get(), 0);
       out.data = m.message;
       out.index = ++m.index;

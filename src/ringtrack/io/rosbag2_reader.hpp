@@ -12,7 +12,9 @@ namespace ringtrack::io {
 
 /// Reads a rosbag2 folder (metadata.yaml and the .db3 files it lists, or without metadata.yaml
 /// every .db3 file of the folder by name) or a single .db3 file. Messages come file by file,
-/// each file in (timestamp, id) order. Compressed bags and other storage plugins are rejected.
+/// each file in (timestamp, id) order. Bags rosbag2 compressed with zstd are read: per file (each
+/// .db3.zstd expanded to a temporary folder, removed with the reader) and per message. Other
+/// storage plugins and compression formats are rejected.
 class Rosbag2Reader final : public RosbagReader {
  public:
   /// Opens the bag and reads its topics; throws core::InputError naming the file and what was

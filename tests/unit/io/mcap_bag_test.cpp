@@ -13,11 +13,15 @@
 #include "io_test_util.hpp"
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/mcap_bag_reader.hpp"
+#include "ringtrack/io/mcap_writer.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
 #include "ringtrack/io/rosbag_source.hpp"
 #include "ringtrack/io/scan_source.hpp"
 #include "support/mcap_check.hpp"
+#include "support/rosbag_writers.hpp"
 #include "support/run_command.hpp"
+#include "support/velodyne_encoder.hpp"
+#include "support/zstd_util.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -179,6 +183,81 @@ TEST_F(McapBag, ACutOffBagGivesTheScansBeforeTheCutAndAWarning) {
   EXPECT_NE(source->warning().find("cut.mcap: file cut off at offset "), std::string::npos)
       << source->warning();
   EXPECT_EQ(source->warning().find('\n'), std::string::npos);
+}
+
+// An MCAP bag folder that rosbag2 compressed itself (`--compression-format zstd`): per file (the
+// .mcap as one zstd stream, "x.mcap.zstd") or per message (each payload one zstd frame) gives the
+// scans of the same bag uncompressed. Written by ringtrack's MCAP writer (checked against the
+// reference reader in mcap_test.cpp); needs neither node nor the real data.
+TEST_F(McapBag, BagsCompressedByRosbag2GiveThePlainScans) {
+  TempDir tmp;
+  const ringtrack::test::VelodyneEncoder encoder(ringtrack::test::VelodyneEncoderOptions{});
+  const auto packets = encoder.encode(0, 754 * 4, [](long long s, int laser) {
+    return ringtrack::test::VelodyneEchoPair{
+        {static_cast<std::uint16_t>(900 + (s * 13 + laser) % 4000), 7}, {}};
+  });
+  const auto messages =
+      ringtrack::test::velodyne_scan_messages(packets, 0, ringtrack::test::RosEncoding::kCdr);
+  const auto write_bag = [&](const fs::path& folder, bool compress_messages,
+                             const std::string& mode) {
+    fs::create_directories(folder);
+    const std::string file = folder.filename().string() + "_0.mcap";
+    {
+      McapWriterOptions options;
+      options.profile = "ros2";
+      McapWriter writer(folder / file, options);
+      const auto schema = writer.add_schema("velodyne_msgs/msg/VelodyneScan", "ros2msg", {});
+      const auto channel = writer.add_channel(schema, "/velodyne_packets", "cdr");
+      for (const auto& m : messages) {
+        const auto stamp = static_cast<std::uint64_t>(m.stamp_ns);
+        writer.write_message(channel, stamp, stamp,
+                             compress_messages ? ringtrack::test::zstd_compress(m.data) : m.data);
+      }
+      writer.close();
+    }
+    std::string listed = file;
+    if (mode == "FILE") {
+      ringtrack::test::zstd_compress_file(folder / file, folder / (file + ".zstd"));
+      fs::remove(folder / file);
+      listed += ".zstd";
+    }
+    test::write_text(folder / "metadata.yaml",
+                     "rosbag2_bagfile_information:\n  version: 8\n  storage_identifier: mcap\n"
+                     "  relative_file_paths:\n    - " +
+                         listed + "\n  compression_format: " + (mode.empty() ? "\"\"" : "zstd") +
+                         "\n  compression_mode: " + (mode.empty() ? "\"\"" : mode) + "\n");
+  };
+  write_bag(tmp / "plain", false, "");
+  write_bag(tmp / "file", false, "FILE");
+  write_bag(tmp / "message", true, "MESSAGE");
+  auto plain_source = open_scan_source((tmp / "plain").string(), defaults_);
+  const auto expected = all_scans(*plain_source);
+  ASSERT_GE(expected.size(), 3u);
+  for (const std::string name : {"file", "message"}) {
+    EXPECT_TRUE(is_mcap_bag(tmp / name)) << name;
+    auto source = open_scan_source((tmp / name).string(), defaults_);
+    const auto scans = all_scans(*source);
+    ASSERT_EQ(scans.size(), expected.size()) << name;
+    for (std::size_t k = 0; k < scans.size(); ++k) {
+      expect_equal_scans(scans[k], expected[k], name + " scan " + std::to_string(k));
+    }
+  }
+
+  // A payload that is not zstd in a message-compressed bag names the file and the message.
+  test::write_text(tmp / "message" / "metadata.yaml",
+                   "rosbag2_bagfile_information:\n  storage_identifier: mcap\n"
+                   "  relative_file_paths: [../plain/plain_0.mcap]\n"
+                   "  compression_format: zstd\n  compression_mode: MESSAGE\n");
+  try {
+    auto source = open_scan_source((tmp / "message").string(), defaults_);
+    all_scans(*source);
+    ADD_FAILURE() << "a plain payload was taken for a zstd frame";
+  } catch (const core::InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("plain_0.mcap: message 1 of /velodyne_packets: not a zstd frame"),
+              std::string::npos)
+        << what;
+  }
 }
 
 TEST_F(McapBag, ACorruptChunkIsAnErrorNamingItsOffset) {

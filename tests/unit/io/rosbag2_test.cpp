@@ -24,6 +24,7 @@
 #include "support/rosbag_writers.hpp"
 #include "support/temp_dir.hpp"
 #include "support/velodyne_encoder.hpp"
+#include "support/zstd_util.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -438,6 +439,115 @@ TEST(Rosbag2, SplitBagsAreReadFileByFile) {
   expect_same_scans(source, decode_direct(ps));
 }
 
+// metadata.yaml as `ros2 bag record --compression-format zstd --compression-mode <mode>`
+// writes it (rosbag2 appends ".zstd" to each storage file it compresses whole).
+void write_compressed_metadata(const fs::path& bag, const std::string& file,
+                               const std::string& mode) {
+  std::ofstream(bag / "metadata.yaml")
+      << "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n"
+         "  relative_file_paths:\n    - "
+      << file << "\n  compression_format: zstd\n  compression_mode: " << mode << "\n";
+}
+
+// A bag of the test packets compressed by file (the .db3 as one zstd stream) or by message
+// (each message's data one zstd frame) gives exactly the scans of the packets; the expanded
+// copy of a file-compressed bag lives in the temporary directory only while the reader does.
+TEST(Rosbag2, BagsCompressedByRosbag2GiveThePlainScans) {
+  test::TempDir dir;
+  const auto ps = encode_packets(4.3);
+  const auto messages = scan_messages(ps, 1);
+  const auto expected = decode_direct(ps);
+  ASSERT_GE(expected.size(), 3u);
+
+  const fs::path file_bag = dir.path() / "file";
+  test::write_rosbag2(file_bag, kTopics, messages);
+  test::zstd_compress_file(file_bag / "file_0.db3", file_bag / "file_0.db3.zstd");
+  fs::remove(file_bag / "file_0.db3");
+  write_compressed_metadata(file_bag, "file_0.db3.zstd", "FILE");
+  const fs::path tmp = dir.path() / "tmp";
+  fs::create_directories(tmp);
+  const std::string old_tmpdir = std::getenv("TMPDIR") != nullptr ? std::getenv("TMPDIR") : "";
+  ::setenv("TMPDIR", tmp.c_str(), 1);
+  {
+    RosbagScanSource source(file_bag);
+    EXPECT_FALSE(fs::is_empty(tmp));  // the expanded .db3
+    expect_same_scans(source, expected);
+    Rosbag2Reader reader(file_bag);
+    EXPECT_EQ(reader.files().front(), file_bag / "file_0.db3.zstd");
+  }
+  EXPECT_TRUE(fs::is_empty(tmp));
+  if (old_tmpdir.empty()) {
+    ::unsetenv("TMPDIR");
+  } else {
+    ::setenv("TMPDIR", old_tmpdir.c_str(), 1);
+  }
+
+  const fs::path message_bag = dir.path() / "message";
+  auto packed = messages;
+  for (auto& m : packed) m.data = test::zstd_compress(m.data);
+  test::write_rosbag2(message_bag, kTopics, packed);
+  write_compressed_metadata(message_bag, "message_0.db3", "MESSAGE");
+  RosbagScanSource source(message_bag);
+  expect_same_scans(source, expected);
+}
+
+TEST(Rosbag2, CorruptCompressedBagsAreClearErrors) {
+  test::TempDir dir;
+  const auto ps = encode_packets(2.2);
+  const auto messages = scan_messages(ps, 1);
+  const fs::path bag = dir.path() / "bag";
+  test::write_rosbag2(bag, kTopics, messages);
+  const fs::path db = bag / "bag_0.db3";
+
+  // Formats and modes rosbag2 does not write.
+  std::ofstream(bag / "metadata.yaml")
+      << "rosbag2_bagfile_information:\n  relative_file_paths: [bag_0.db3]\n"
+         "  compression_format: lz4\n  compression_mode: FILE\n";
+  expect_input_error([&] { Rosbag2Reader r(bag); },
+                     {"metadata.yaml", "compression_format 'lz4'", "expected zstd"});
+  std::ofstream(bag / "metadata.yaml")
+      << "rosbag2_bagfile_information:\n  relative_file_paths: [bag_0.db3]\n"
+         "  compression_format: zstd\n  compression_mode: chunk\n";
+  expect_input_error([&] { Rosbag2Reader r(bag); },
+                     {"metadata.yaml", "compression_mode 'chunk'", "FILE or MESSAGE"});
+
+  // A file-compressed bag cut in half, and one that is not zstd at all.
+  test::zstd_compress_file(db, bag / "bag_0.db3.zstd");
+  const auto full = fs::file_size(bag / "bag_0.db3.zstd");
+  fs::resize_file(bag / "bag_0.db3.zstd", full / 2);
+  write_compressed_metadata(bag, "bag_0.db3.zstd", "FILE");
+  expect_input_error([&] { Rosbag2Reader r(bag); },
+                     {"bag_0.db3.zstd", "offset " + std::to_string(full / 2), "ends inside"});
+  fs::copy_file(db, bag / "bag_0.db3.zstd", fs::copy_options::overwrite_existing);
+  expect_input_error([&] { Rosbag2Reader r(bag); },
+                     {"bag_0.db3.zstd", "offset", "not a valid zstd stream"});
+  std::ofstream(bag / "bag_0.db3.zstd", std::ios::trunc).flush();
+  expect_input_error([&] { Rosbag2Reader r(bag); }, {"bag_0.db3.zstd", "empty"});
+
+  // A message-compressed bag whose second message is not zstd, and one whose second frame is
+  // cut: the scan source stops at that message with its number.
+  for (const bool cut : {false, true}) {
+    auto packed = messages;
+    for (auto& m : packed) m.data = test::zstd_compress(m.data);
+    if (cut) {
+      packed[1].data.resize(packed[1].data.size() / 2);
+    } else {
+      packed[1].data = messages[1].data;
+    }
+    const fs::path mbag = dir.path() / (cut ? "cut" : "plain");
+    test::write_rosbag2(mbag, kTopics, packed);
+    write_compressed_metadata(mbag, mbag.filename().string() + "_0.db3", "MESSAGE");
+    Rosbag2Reader reader(mbag);
+    reader.select_topic("/velodyne_packets");
+    RosbagMessage m;
+    ASSERT_TRUE(reader.next(m));
+    EXPECT_EQ(std::vector<std::uint8_t>(m.data.begin(), m.data.end()), messages[0].data);
+    expect_input_error([&] { reader.next(m); },
+                       {mbag.filename().string() + "_0.db3", "message 2 of /velodyne_packets",
+                        cut ? "zstd frame" : "not a zstd frame"});
+  }
+}
+
 TEST(Rosbag2, CorruptBagsAreClearErrors) {
   test::TempDir dir;
   const auto ps = encode_packets(0.5);
@@ -516,7 +626,7 @@ TEST(Rosbag2, CorruptBagsAreClearErrors) {
   write_meta(
       "rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n  compression_format: zstd\n"
       "  relative_file_paths: [meta_0.db3.zstd]\n");
-  expect_input_error([&] { Rosbag2Reader r(meta); }, {"compressed bags (zstd)"});
+  expect_input_error([&] { Rosbag2Reader r(meta); }, {"meta_0.db3.zstd", "missing"});
   write_meta("rosbag2_bagfile_information:\n  storage_identifier: sqlite3\n");
   expect_input_error([&] { Rosbag2Reader r(meta); }, {"relative_file_paths"});
   write_meta("rosbag2_bagfile_information:\n  relative_file_paths: [gone_0.db3]\n");
