@@ -540,17 +540,6 @@ std::string skipped_note(const io::RunStatus& s) {
   return note + ")";
 }
 
-// One scan into the MCAP file, in the local frame (the clouds are float32, like the maps); the
-// frame's origin goes into the metadata with the first scan.
-void write_mcap_frame(io::FoxgloveSink& mcap, const core::OrganizedScan& scan,
-                      const core::Pose& pose, const pipeline::FrameResult& result,
-                      const pipeline::Pipeline& pipeline, std::uint64_t scans) {
-  if (scans == 1) mcap.write_metadata("frame", {{"origin_m", origin_comment(result.origin)}});
-  core::Pose local = pose;
-  local.translation -= result.origin;
-  mcap.write_frame(scan, local, result, pipeline.static_map());
-}
-
 // A warning when the altitude test rejected clusters and nothing was detected: the heights of
 // the poses' frame may not be what detection.sensor_height_m says (docs/detection.md).
 void warn_about_heights(const core::Config& config, std::uint64_t too_high,
@@ -650,7 +639,7 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
       ++status.scans_processed;
       const Eigen::Vector3d& origin = result.origin;
       status.origin_m = {origin.x(), origin.y(), origin.z()};
-      if (mcap) write_mcap_frame(*mcap, scan, pose, result, *pipeline, status.scans_processed);
+      if (mcap) mcap->write_pipeline_frame(scan, pose, result, pipeline->static_map());
       if (filtered) {
         filtered->hold(index, scan);
         filtered->write_released(pipeline->dynamic_filter());

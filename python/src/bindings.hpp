@@ -40,5 +40,6 @@ void bind_pipeline(py::module_& m);
 void bind_sources(py::module_& m);
 void bind_sim(py::module_& m);
 void bind_experiment(py::module_& m);
+void bind_mcap(py::module_& m);
 
 }  // namespace ringtrack::python

@@ -25,7 +25,7 @@ PYBIND11_MODULE(_ringtrack, m) {
   // source tree's config/ (docs/python.md, "Installing").
   m.attr("config_dir") = RINGTRACK_CONFIG_DIR;
   static py::exception<ringtrack::core::ConfigError> config_error(m, "ConfigError",
-                                                                   PyExc_ValueError);
+                                                                  PyExc_ValueError);
   static py::exception<ringtrack::core::InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
@@ -41,4 +41,5 @@ PYBIND11_MODULE(_ringtrack, m) {
   bind_sources(m);
   bind_sim(m);
   bind_experiment(m);
+  bind_mcap(m);
 }

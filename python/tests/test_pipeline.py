@@ -177,7 +177,7 @@ def test_docs_example_runs(tmp_path, monkeypatch):
     """The examples of docs/python.md, as written, on the sequence they name."""
     doc = (SOURCE_DIR / "docs" / "python.md").read_text()
     blocks = re.findall(r"```python\n(.*?)```", doc, re.S)
-    assert len(blocks) == 2
+    assert len(blocks) == 3
     monkeypatch.chdir(tmp_path)
     run_cli("simulate", "6", "--duration", "8", "--out", tmp_path / "park")
     pytest.importorskip("matplotlib")
@@ -191,6 +191,9 @@ def test_docs_example_runs(tmp_path, monkeypatch):
     second = blocks[1].replace("builtins=[2, 6], duration_s=30", "builtins=[2], duration_s=2")
     exec(second, scope)  # noqa: S102
     assert 0 < scope["result"]["groups"]["overall"]["metrics"]["gt_presences"]
+    exec(blocks[2], scope)  # noqa: S102
+    assert scope["mcap"].stats["scans"] == len(scope["sequence"]) == 80
+    assert scope["mcap"].stats["maps"] == 1 and (tmp_path / "park.mcap").stat().st_size > 1000
 
 
 def test_odometry_follows_a_flying_sensor():

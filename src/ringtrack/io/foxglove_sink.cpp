@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <unordered_set>
@@ -89,6 +90,21 @@ void FoxgloveSink::write_frame(const core::OrganizedScan& scan, const core::Pose
   if (options_.map_every_scans > 0 && stats_.scans % options_.map_every_scans == 0) {
     write_map(map, stamp_ns_);
   }
+}
+
+void FoxgloveSink::write_pipeline_frame(const core::OrganizedScan& scan,
+                                        const core::Pose& world_pose,
+                                        const pipeline::FrameResult& result,
+                                        const mapping::StaticMap& map) {
+  if (stats_.scans == 0) {
+    char origin[160];
+    std::snprintf(origin, sizeof origin, "origin_m %.3f %.3f %.3f (world = point + origin)",
+                  result.origin.x(), result.origin.y(), result.origin.z());
+    write_metadata("frame", {{"origin_m", origin}});
+  }
+  core::Pose local = world_pose;
+  local.translation -= result.origin;
+  write_frame(scan, local, result, map);
 }
 
 void FoxgloveSink::finish(const mapping::StaticMap& map, std::int64_t stamp_ns) {

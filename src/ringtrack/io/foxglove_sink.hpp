@@ -66,6 +66,12 @@ class FoxgloveSink {
   /// its pose, its detections and the reported tracks; and the map when one is due.
   void write_frame(const core::OrganizedScan& scan, const core::Pose& pose,
                    const pipeline::FrameResult& result, const mapping::StaticMap& map);
+  /// Writes one scan the pipeline processed at `world_pose` (the poses' frame) as `run --mcap`
+  /// and the Python package do: in the pipeline's local frame (result.origin subtracted, so the
+  /// float32 clouds keep their precision), with the origin as the metadata record "frame"
+  /// (origin_m) before the first scan, and the pipeline's map for the periodic map.
+  void write_pipeline_frame(const core::OrganizedScan& scan, const core::Pose& world_pose,
+                            const pipeline::FrameResult& result, const mapping::StaticMap& map);
   /// Writes the final static map at `stamp_ns` and closes the file (complete only then).
   void finish(const mapping::StaticMap& map, std::int64_t stamp_ns);
   /// Waits until the writer's worker thread has written what it was handed (benchmarks).

@@ -104,6 +104,9 @@ class Pipeline {
   [[nodiscard]] const detection::DetectorStats& detector_stats() const { return detector_.stats(); }
   /// Scans skipped so far because their stamp was not after the previous scan's.
   [[nodiscard]] std::uint64_t skipped_scans() const { return skipped_scans_; }
+  /// The result of the last process() / process_with_odometry() call (what it returned), for
+  /// sinks that come after the call (the Python package's MCAP writer).
+  [[nodiscard]] const FrameResult& last_result() const { return result_; }
   /// Moves the scans still held back by the dynamic-object filter into the static map.
   void finish();
 
