@@ -91,3 +91,27 @@ def test_misuse_is_a_clear_error_and_leaves_no_partial_file(simulated_sequence, 
     with pytest.raises(RuntimeError, match="closed"):
         done.write(pipeline, *scans[2])
     validate(tmp_path / "done.mcap")
+
+
+def test_the_foxglove_layout_names_what_the_file_holds(simulated_sequence, tmp_path):
+    """config/foxglove_layout.json can only show what the file holds: every topic it names is
+    written, with the schema its panel expects, and the scan cloud has the field it colours by
+    (nobody here can open Foxglove; this keeps the layout and the sink from drifting apart)."""
+    layout = json.loads((SOURCE_DIR / "config" / "foxglove_layout.json").read_text())
+    seq, _ = simulated_sequence
+    run_python(seq, tmp_path / "layout.mcap")
+    written = validate(tmp_path / "layout.mcap")
+    schemas = {c["topic"]: c["schema"] for c in written["channels"]}
+    named = set()
+    for panel_id, panel in layout["configById"].items():
+        for topic, settings in panel.get("topics", {}).items():
+            named.add(topic)
+            if "colorField" in settings:
+                assert schemas[topic] == "foxglove.PointCloud", panel_id
+                fields = {f["name"] for f in written["decoded"][topic][0]["fields"]}
+                assert settings["colorField"] in fields | {"x", "y", "z"}, (topic, fields)
+        if "topicPath" in panel:
+            named.add(panel["topicPath"].split(".")[0])
+    assert named, "the layout names no topic"
+    assert named <= set(schemas), named - set(schemas)
+    assert {"/ringtrack/scan", "/ringtrack/tracks", "/ringtrack/static_map"} <= named
