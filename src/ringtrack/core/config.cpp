@@ -140,6 +140,8 @@ class Schema {
     fields_.push_back({section_, name, std::move(doc), std::move(get), std::move(set)});
   }
 
+  // Long because it is the schema: one registration per key, section by section in the order
+  // `dump-config` prints them, each with its range and doc beside the key it checks.
   void build(Config& c) {
     auto& s = c.segmentation;
     section_ = "segmentation";

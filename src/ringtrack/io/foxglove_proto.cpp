@@ -29,7 +29,8 @@ struct MessageDef {
   std::vector<EnumDef> enums;
 };
 
-// Foxglove's schemas, field for field (schemas/proto/foxglove/*.proto of foxglove-sdk).
+// Foxglove's schemas, field for field (schemas/proto/foxglove/*.proto of foxglove-sdk). Long
+// because it is that table: one entry per message type, read against the .proto files.
 const std::vector<MessageDef>& foxglove_messages() {
   static const std::vector<MessageDef> defs = {
       {"Vector3",

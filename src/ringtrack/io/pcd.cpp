@@ -341,6 +341,8 @@ std::string_view to_string(PcdEncoding encoding) {
   return "binary";
 }
 
+// Long because it reads the header's lines in the order the PCD format fixes (VERSION ... DATA),
+// each with its own check and message (docs/formats.md, "PCD files").
 PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::string& name) {
   PcdHeader h;
   std::vector<std::string_view> names;

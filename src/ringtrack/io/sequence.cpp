@@ -124,6 +124,8 @@ SequenceMeta SequenceMeta::for_sensor(const core::SensorModel& model, int column
   return meta;
 }
 
+// Long because it reads sequence.yaml key by key (docs/formats.md), each key with its own check
+// and message; splitting it would scatter one format's rules.
 SequenceMeta read_sequence_yaml(const fs::path& path) {
   YAML::Node root;
   try {

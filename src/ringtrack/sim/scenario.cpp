@@ -481,6 +481,8 @@ std::vector<Footprint> ground_footprints(const Scenario& s) {
   return out;
 }
 
+// Long because it is the list of checks, one per field in the scenario's own order, so that a
+// reader can see every bound a scenario file must keep in one place.
 void validate(const Scenario& s, const std::string& src) {
   require_bounded(src, "scenario", "duration_s", s.duration_s, kMaxDurationS);
   require_bounded(src, "scenario", "area_m[0]", s.area_m.x(), kMaxWorldExtentM);

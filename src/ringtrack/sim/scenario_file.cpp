@@ -151,7 +151,8 @@ std::string read_text(const std::filesystem::path& path) {
 }
 
 // The scenario in a parsed YAML document; parse_scenario_yaml turns what yaml-cpp throws
-// itself (a conversion the checks here missed) into a ConfigError.
+// itself (a conversion the checks here missed) into a ConfigError. Long because it reads the
+// format key by key in the documented order (docs/simulator.md), each with its own message.
 Scenario scenario_from_yaml(const YAML::Node& root, const std::string& source) {
   Scenario s;
   MapReader top(root, source, "scenario");
@@ -526,6 +527,8 @@ Scenario resolve_scenario(const std::string& arg) {
   return builtin_scenario(arg);
 }
 
+// Long because it writes every field of the scenario in the file format's order: the mirror of
+// scenario_from_yaml, kept as one readable sequence.
 std::string format_scenario_yaml(const Scenario& s) {
   YAML::Emitter out;
   out.SetDoublePrecision(10);

@@ -113,34 +113,48 @@ SimulatedScan Simulator::next() {
 }
 
 void Simulator::next(SimulatedScan& out) {
-  const int rings = model_.rings(), cols = model_.columns();
   const std::int64_t k = next_index_++;
   const std::int64_t t0 = scan_stamp_ns(k);
   const double scan_s = 1.0 / model_.scan_rate_hz;
   const std::int64_t t_mid = t0 + static_cast<std::int64_t>(std::llround(0.5 * scan_s * 1e9));
 
   out.index = k;
-  out.scan = core::OrganizedScan(rings, cols);
+  out.scan = core::OrganizedScan(model_.rings(), model_.columns());
   out.scan.set_uniform_columns(model_, t0);
   out.labels.assign(out.scan.size(), 0u);
   out.pose = sensor_pose_at(t0);
 
   // Actors at mid-scan; each ray sees them shifted by their velocity to its own time.
+  place_actors(t_mid);
+  const double sweep = place_columns(out.scan, t_mid);
+  if (use_bins_) build_bins(sensor_pose_at(t_mid).translation, sweep, scan_s);
+
+  std::vector<ActorHits> hits(world_.actors().size());
+  const double t_max = model_.max_range_m + std::max(0.5, 6.0 * scenario_.sensor.range_noise_m);
+  for (int c = 0; c < model_.columns(); ++c) cast_column(c, t_mid, t_max, out, hits);
+  collect_truth(hits, out);
+}
+
+void Simulator::place_actors(std::int64_t t_mid) {
   world_.advance_to(t_mid);
   const auto& actors = world_.actors();
   prims_.resize(static_count_);
-  std::vector<ActorState>& mid = mid_states_;
-  mid.resize(actors.size());
+  mid_states_.resize(actors.size());
   present_.resize(actors.size());
   for (std::size_t i = 0; i < actors.size(); ++i) {
     // Scripted actors exist only between their first and last waypoint (decided at mid-scan).
     present_[i] = static_cast<std::uint8_t>(world_.present(i, t_mid) ? 1 : 0);
-    mid[i] = world_.state_at(i, t_mid);
-    velocity_[i] = present_[i] ? mid[i].velocity_mps : Eigen::Vector3d::Zero();
-    if (present_[i]) append_body(actors[i], mid[i], static_cast<std::int32_t>(i), prims_);
+    mid_states_[i] = world_.state_at(i, t_mid);
+    velocity_[i] = present_[i] ? mid_states_[i].velocity_mps : Eigen::Vector3d::Zero();
+    if (present_[i]) {
+      append_body(actors[i], mid_states_[i], static_cast<std::int32_t>(i), prims_);
+    }
   }
+}
 
+double Simulator::place_columns(const core::OrganizedScan& scan, std::int64_t t_mid) {
   // Sensor pose at every column's firing time: a moving sensor's scan is skewed like a real one.
+  const int cols = model_.columns();
   col_rot_.resize(static_cast<std::size_t>(cols));
   col_pos_.resize(static_cast<std::size_t>(cols));
   const bool moving_sensor = scenario_.sensor.motion != SensorMotion::kStatic;
@@ -151,7 +165,7 @@ void Simulator::next(SimulatedScan& out) {
       col_pos_[cu] = col_pos_[0];
       continue;
     }
-    const core::Pose p = sensor_pose_at(out.scan.column_stamp_ns[cu]);
+    const core::Pose p = sensor_pose_at(scan.column_stamp_ns[cu]);
     col_rot_[cu] = p.rotation.normalized().toRotationMatrix();
     col_pos_[cu] = p.translation;
   }
@@ -159,103 +173,105 @@ void Simulator::next(SimulatedScan& out) {
   double sweep = 0.0;
   for (int c = 0; c < cols; ++c)
     sweep = std::max(sweep, (col_pos_[static_cast<std::size_t>(c)] - ref).norm());
-  sweep += 0.05;  // the rings' vertical offsets, rotated by the tilt
-  if (use_bins_) build_bins(ref, sweep, scan_s);
+  return sweep + 0.05;  // the rings' vertical offsets, rotated by the tilt
+}
 
-  struct Acc {
-    int n{0};
-    Eigen::Vector3d sum{Eigen::Vector3d::Zero()};
-    double sum_dt{0.0};
-    core::Box3 box;
+std::int64_t Simulator::nearest_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double dt,
+                                    double& best) const {
+  std::int64_t hit = -1;
+  const auto test = [&](std::uint32_t i) {
+    const Primitive& p = prims_[i];
+    const double t =
+        p.mover < 0
+            ? intersect(p, o, d, 0.0, best)
+            : intersect(p, o - velocity_[static_cast<std::size_t>(p.mover)] * dt, d, 0.0, best);
+    if (t < best) {
+      best = t;
+      hit = static_cast<std::int64_t>(i);
+    }
   };
-  std::vector<Acc> acc(actors.size());
+  if (use_bins_) {
+    for (const std::uint32_t i : all_around_) test(i);
+    const auto b = static_cast<std::size_t>(bin_of(fast_atan2(d.y(), d.x())));
+    for (std::uint32_t j = bin_start_[b]; j < bin_start_[b + 1]; ++j) test(bin_items_[j]);
+  } else {
+    for (std::uint32_t i = 0; i < prims_.size(); ++i) test(i);
+  }
+  return hit;
+}
 
+void Simulator::cast_column(int c, std::int64_t t_mid, double t_max, SimulatedScan& out,
+                            std::vector<ActorHits>& hits) {
   const Ground& ground = scenario_.ground;
   const SensorSpec& spec = scenario_.sensor;
-  const double t_max = model_.max_range_m + std::max(0.5, 6.0 * spec.range_noise_m);
-  for (int c = 0; c < cols; ++c) {
-    const auto cu = static_cast<std::size_t>(c);
-    const double dt = static_cast<double>(out.scan.column_stamp_ns[cu] - t_mid) * 1e-9;
-    const Eigen::Matrix3d& rot = col_rot_[cu];
-    const Eigen::Vector3d& pos = col_pos_[cu];
-    for (int r = 0; r < rings; ++r) {
-      const Eigen::Vector3d d = rot * sensor_dir_[static_cast<std::size_t>(r * cols + c)];
-      const Eigen::Vector3d o =
-          pos + rot.col(2) * model_.vertical_offset_m[static_cast<std::size_t>(r)];
-      double best = ground.intersect(o, d, 0.0, t_max);
-      std::int64_t hit = -1;
-      const auto test = [&](std::uint32_t i) {
-        const Primitive& p = prims_[i];
-        const double t =
-            p.mover < 0
-                ? intersect(p, o, d, 0.0, best)
-                : intersect(p, o - velocity_[static_cast<std::size_t>(p.mover)] * dt, d, 0.0, best);
-        if (t < best) {
-          best = t;
-          hit = static_cast<std::int64_t>(i);
-        }
-      };
-      if (use_bins_) {
-        for (const std::uint32_t i : all_around_) test(i);
-        const auto b = static_cast<std::size_t>(bin_of(fast_atan2(d.y(), d.x())));
-        for (std::uint32_t j = bin_start_[b]; j < bin_start_[b + 1]; ++j) test(bin_items_[j]);
-      } else {
-        for (std::uint32_t i = 0; i < prims_.size(); ++i) test(i);
-      }
-      if (!std::isfinite(best)) continue;  // no echo: stays kNoReturn
-      // One uniform and one normal draw per echo keep the random stream aligned across changes.
-      const double u = noise_rng_.uniform();
-      const double noise = noise_rng_.normal() * spec.range_noise_m;
-      const double frac = best / model_.max_range_m;
-      if (u < spec.dropout_probability + spec.far_dropout_probability * frac * frac) continue;
-      const Eigen::Vector3d x = o + best * d;
-      Eigen::Vector3d n;
-      float refl;
-      std::uint32_t label = 0;
-      std::int32_t slot = -1;
-      if (hit < 0) {
-        n = ground.normal_at(x.x(), x.y());
-        refl = ground.reflectivity;
-      } else {
-        const Primitive& p = prims_[static_cast<std::size_t>(hit)];
-        const Eigen::Vector3d shift =
-            p.mover < 0 ? Eigen::Vector3d::Zero()
-                        : Eigen::Vector3d(velocity_[static_cast<std::size_t>(p.mover)] * dt);
-        n = normal_at(p, x - shift);
-        refl = p.reflectivity;
-        label = p.label;
-        slot = p.mover;
-      }
-      // Calibrated reflectivity (0-255) with a Lambertian factor and a mild fall-off with range.
-      const double cos_inc = std::abs(n.dot(d));
-      const double inten =
-          255.0 * refl * (0.35 + 0.65 * cos_inc) / (1.0 + (best / 150.0) * (best / 150.0));
-      const float intensity = static_cast<float>(std::round(std::clamp(inten, 0.0, 255.0)));
-      out.scan.set_range(model_, r, c, static_cast<float>(best + noise), intensity);
-      const std::size_t idx = out.scan.index(r, c);
-      if (!out.scan.valid(idx)) continue;
-      out.labels[idx] = label;
-      if (slot >= 0) {
-        Acc& a = acc[static_cast<std::size_t>(slot)];
-        ++a.n;
-        a.sum += x;
-        a.sum_dt += dt;
-        a.box.extend(x.cast<float>());
-      }
+  const int cols = model_.columns();
+  const auto cu = static_cast<std::size_t>(c);
+  const double dt = static_cast<double>(out.scan.column_stamp_ns[cu] - t_mid) * 1e-9;
+  const Eigen::Matrix3d& rot = col_rot_[cu];
+  const Eigen::Vector3d& pos = col_pos_[cu];
+  for (int r = 0; r < model_.rings(); ++r) {
+    const Eigen::Vector3d d = rot * sensor_dir_[static_cast<std::size_t>(r * cols + c)];
+    const Eigen::Vector3d o =
+        pos + rot.col(2) * model_.vertical_offset_m[static_cast<std::size_t>(r)];
+    double best = ground.intersect(o, d, 0.0, t_max);
+    const std::int64_t hit = nearest_hit(o, d, dt, best);
+    if (!std::isfinite(best)) continue;  // no echo: stays kNoReturn
+    // One uniform and one normal draw per echo keep the random stream aligned across changes.
+    const double u = noise_rng_.uniform();
+    const double noise = noise_rng_.normal() * spec.range_noise_m;
+    const double frac = best / model_.max_range_m;
+    if (u < spec.dropout_probability + spec.far_dropout_probability * frac * frac) continue;
+    const Eigen::Vector3d x = o + best * d;
+    Eigen::Vector3d n;
+    float refl;
+    std::uint32_t label = 0;
+    std::int32_t slot = -1;
+    if (hit < 0) {
+      n = ground.normal_at(x.x(), x.y());
+      refl = ground.reflectivity;
+    } else {
+      const Primitive& p = prims_[static_cast<std::size_t>(hit)];
+      const Eigen::Vector3d shift =
+          p.mover < 0 ? Eigen::Vector3d::Zero()
+                      : Eigen::Vector3d(velocity_[static_cast<std::size_t>(p.mover)] * dt);
+      n = normal_at(p, x - shift);
+      refl = p.reflectivity;
+      label = p.label;
+      slot = p.mover;
+    }
+    // Calibrated reflectivity (0-255) with a Lambertian factor and a mild fall-off with range.
+    const double cos_inc = std::abs(n.dot(d));
+    const double inten =
+        255.0 * refl * (0.35 + 0.65 * cos_inc) / (1.0 + (best / 150.0) * (best / 150.0));
+    const float intensity = static_cast<float>(std::round(std::clamp(inten, 0.0, 255.0)));
+    out.scan.set_range(model_, r, c, static_cast<float>(best + noise), intensity);
+    const std::size_t idx = out.scan.index(r, c);
+    if (!out.scan.valid(idx)) continue;
+    out.labels[idx] = label;
+    if (slot >= 0) {
+      ActorHits& a = hits[static_cast<std::size_t>(slot)];
+      ++a.n;
+      a.sum += x;
+      a.sum_dt += dt;
+      a.box.extend(x.cast<float>());
     }
   }
+}
 
+void Simulator::collect_truth(const std::vector<ActorHits>& hits, SimulatedScan& out) const {
+  const auto& actors = world_.actors();
+  const std::vector<ActorState>& mid = mid_states_;
   out.objects.clear();
   for (std::size_t i = 0; i < actors.size(); ++i) {
     if (!present_[i]) continue;  // absent actors have no ground truth
     ObjectTruth t;
     t.id = actors[i].id;
     t.object_class = actors[i].object_class;
-    t.hit_points = acc[i].n;
-    const double mean_dt = acc[i].n > 0 ? acc[i].sum_dt / acc[i].n : 0.0;
-    if (acc[i].n > 0) {
-      t.centroid_m = (acc[i].sum / acc[i].n).cast<float>();
-      t.box = acc[i].box;
+    t.hit_points = hits[i].n;
+    const double mean_dt = hits[i].n > 0 ? hits[i].sum_dt / hits[i].n : 0.0;
+    if (hits[i].n > 0) {
+      t.centroid_m = (hits[i].sum / hits[i].n).cast<float>();
+      t.box = hits[i].box;
     }
     t.body_center_m =
         (body_center(actors[i], mid[i]) + mid[i].velocity_mps * mean_dt).cast<float>();

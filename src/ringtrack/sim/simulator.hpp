@@ -71,7 +71,29 @@ class Simulator {
   [[nodiscard]] const std::vector<Actor>& actors() const { return world_.actors(); }
 
  private:
+  // What the rays of one scan found on one actor: the ground truth's hit count, centroid, box
+  // and the mean time offset of its hits from mid-scan.
+  struct ActorHits {
+    int n{0};
+    Eigen::Vector3d sum{Eigen::Vector3d::Zero()};
+    double sum_dt{0.0};
+    core::Box3 box;
+  };
   void build_bins(const Eigen::Vector3d& ref, double sensor_sweep_m, double scan_s);
+  // The actors present at t_mid (state, velocity, body primitives after the static ones).
+  void place_actors(std::int64_t t_mid);
+  // The sensor's rotation and position at each column's firing time (col_rot_, col_pos_);
+  // returns how far the beam origins sweep from the mid-scan position (for the bins).
+  double place_columns(const core::OrganizedScan& scan, std::int64_t t_mid);
+  // Nearest primitive the ray o + t d meets before `best` (updated), a moving one shifted back
+  // by its velocity times dt; -1 when none is nearer.
+  std::int64_t nearest_hit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double dt,
+                           double& best) const;
+  // Casts every ring of column c into out (range, intensity, label) and accumulates hits.
+  void cast_column(int c, std::int64_t t_mid, double t_max, SimulatedScan& out,
+                   std::vector<ActorHits>& hits);
+  // The ground truth of the present actors from their hits, sorted by id.
+  void collect_truth(const std::vector<ActorHits>& hits, SimulatedScan& out) const;
 
   Scenario scenario_;
   core::SensorModel model_;

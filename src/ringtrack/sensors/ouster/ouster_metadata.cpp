@@ -95,6 +95,9 @@ bool OusterMetadata::in_window(int m) const {
   return a <= b ? (m >= a && m <= b) : (m >= a || m <= b);
 }
 
+// Long because it reads the metadata JSON field by field (flat or nested in sections, and
+// without udp_profile_lidar for firmware before 2.2; docs/ouster.md), each with its own message
+// naming the key.
 OusterMetadata parse_ouster_metadata(const std::string& text, const std::string& source) {
   json root;
   try {
