@@ -92,9 +92,12 @@ McapBagReader::McapBagReader(const fs::path& path) : impl_(std::make_unique<Impl
   // Each listed "x.mcap.zstd" of a file-compressed bag is expanded to a temporary "x.mcap"
   // (removed with the reader); messages still name the listed file.
   if (m.compression == Rosbag2Compression::kFile) m.expanded.emplace("rosbag2-mcap");
-  for (const auto& file : m.files) {
+  for (std::size_t i = 0; i < m.files.size(); ++i) {
+    const fs::path& file = m.files[i];
     if (m.expanded) {
-      const fs::path storage = m.expanded->path() / file.stem();
+      // Numbered: listed paths may share a name in different folders.
+      const fs::path storage =
+          m.expanded->path() / (std::to_string(i) + "_" + file.stem().string());
       decompress_zstd_file(file, storage);
       m.readers.push_back(std::make_unique<McapReader>(storage, file.string()));
     } else {

@@ -196,8 +196,11 @@ Rosbag2Reader::Rosbag2Reader(const fs::path& path) : impl_(std::make_unique<Impl
     // sqlite reads files only: each listed "x.db3.zstd" is expanded to a temporary "x.db3",
     // removed with the reader (the disk needs room for the expanded bag).
     m.expanded.emplace("rosbag2");
-    for (const auto& file : m.files) {
-      const fs::path storage = m.expanded->path() / file.stem();
+    for (std::size_t i = 0; i < m.files.size(); ++i) {
+      const fs::path& file = m.files[i];
+      // Numbered: listed paths may share a name in different folders.
+      const fs::path storage =
+          m.expanded->path() / (std::to_string(i) + "_" + file.stem().string());
       decompress_zstd_file(file, storage);
       m.dbs.push_back(open_db(storage, file));
     }
