@@ -264,6 +264,59 @@ struct McapWriter::Impl {
     return job;
   }
 
+  // The summary's Statistics record: counts, time range, messages per channel.
+  void write_statistics(Buffer& s) const {
+    const std::size_t r = s.begin_record(Op::kStatistics);
+    s.u64(stats.messages);
+    s.u16(schemas);
+    s.u32(static_cast<std::uint32_t>(sequence.size()));
+    s.u32(0);  // attachments
+    s.u32(stats.metadata);
+    s.u32(static_cast<std::uint32_t>(chunk_index.size()));
+    s.u64(stats.messages > 0 ? first_ns : 0);
+    s.u64(stats.messages > 0 ? last_ns : 0);
+    const std::size_t counts = s.begin_group();
+    for (std::size_t c = 0; c < channel_messages.size(); ++c) {
+      s.u16(static_cast<std::uint16_t>(c));
+      s.u64(channel_messages[c]);
+    }
+    s.end_group(counts);
+    s.end_record(r);
+  }
+
+  // One Chunk Index record per chunk written: where it is and where its message indexes are.
+  void write_chunk_indexes(Buffer& s) const {
+    for (const auto& e : chunk_index) {
+      const std::size_t r = s.begin_record(Op::kChunkIndex);
+      s.u64(e.start_ns);
+      s.u64(e.end_ns);
+      s.u64(e.offset);
+      s.u64(e.length);
+      const std::size_t map = s.begin_group();
+      for (const auto& [channel, off] : e.index_offsets) {
+        s.u16(channel);
+        s.u64(off);
+      }
+      s.end_group(map);
+      s.u64(e.index_length);
+      s.string(mcap_compression_name(options.compression));
+      s.u64(e.compressed_size);
+      s.u64(e.uncompressed_size);
+      s.end_record(r);
+    }
+  }
+
+  // One Metadata Index record per Metadata record.
+  void write_metadata_indexes(Buffer& s) const {
+    for (const auto& e : metadata_index) {
+      const std::size_t r = s.begin_record(Op::kMetadataIndex);
+      s.u64(e.offset);
+      s.u64(e.length);
+      s.string(e.name);
+      s.end_record(r);
+    }
+  }
+
   void flush_chunk() {
     if (current.records.size() == 0) return;
     ++stats.chunks;
@@ -443,53 +496,9 @@ void McapWriter::close() {
   };
   group(Op::kSchema, [&] { s.raw(m.schema_records.bytes()); });
   group(Op::kChannel, [&] { s.raw(m.channel_records.bytes()); });
-  group(Op::kStatistics, [&] {
-    const std::size_t r = s.begin_record(Op::kStatistics);
-    s.u64(m.stats.messages);
-    s.u16(m.schemas);
-    s.u32(static_cast<std::uint32_t>(m.sequence.size()));
-    s.u32(0);  // attachments
-    s.u32(m.stats.metadata);
-    s.u32(static_cast<std::uint32_t>(m.chunk_index.size()));
-    s.u64(m.stats.messages > 0 ? m.first_ns : 0);
-    s.u64(m.stats.messages > 0 ? m.last_ns : 0);
-    const std::size_t counts = s.begin_group();
-    for (std::size_t c = 0; c < m.channel_messages.size(); ++c) {
-      s.u16(static_cast<std::uint16_t>(c));
-      s.u64(m.channel_messages[c]);
-    }
-    s.end_group(counts);
-    s.end_record(r);
-  });
-  group(Op::kChunkIndex, [&] {
-    for (const auto& e : m.chunk_index) {
-      const std::size_t r = s.begin_record(Op::kChunkIndex);
-      s.u64(e.start_ns);
-      s.u64(e.end_ns);
-      s.u64(e.offset);
-      s.u64(e.length);
-      const std::size_t map = s.begin_group();
-      for (const auto& [channel, off] : e.index_offsets) {
-        s.u16(channel);
-        s.u64(off);
-      }
-      s.end_group(map);
-      s.u64(e.index_length);
-      s.string(mcap_compression_name(m.options.compression));
-      s.u64(e.compressed_size);
-      s.u64(e.uncompressed_size);
-      s.end_record(r);
-    }
-  });
-  group(Op::kMetadataIndex, [&] {
-    for (const auto& e : m.metadata_index) {
-      const std::size_t r = s.begin_record(Op::kMetadataIndex);
-      s.u64(e.offset);
-      s.u64(e.length);
-      s.string(e.name);
-      s.end_record(r);
-    }
-  });
+  group(Op::kStatistics, [&] { m.write_statistics(s); });
+  group(Op::kChunkIndex, [&] { m.write_chunk_indexes(s); });
+  group(Op::kMetadataIndex, [&] { m.write_metadata_indexes(s); });
   const std::uint64_t summary_offset_start = summary_start + s.size();
   for (const auto& [op, start, length] : groups) {
     const std::size_t r = s.begin_record(Op::kSummaryOffset);
