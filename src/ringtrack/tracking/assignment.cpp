@@ -85,6 +85,36 @@ std::vector<int> solve_assignment(const Eigen::MatrixXd& cost) {
   return col_of_row;
 }
 
+namespace {
+
+// One connected component of allowed pairs as a square problem: real pairs top-left, "row
+// unpaired" dummies top-right (diagonal at the gate), "column unpaired" dummies bottom-left,
+// dummy-dummy pairs free. Forbidden entries cost more than leaving everything unpaired, so no
+// optimum uses them. Writes the component's pairs into col_of_row.
+void solve_component(const Eigen::MatrixXd& cost, double gate, const std::vector<int>& comp_rows,
+                     const std::vector<int>& comp_cols, std::vector<int>& col_of_row) {
+  const int nr = static_cast<int>(comp_rows.size());
+  const int nc = static_cast<int>(comp_cols.size());
+  const int n = nr + nc;
+  const double forbidden = 2.0 * gate * n + 1.0;
+  Eigen::MatrixXd square = Eigen::MatrixXd::Constant(n, n, forbidden);
+  for (int a = 0; a < nr; ++a) {
+    for (int b = 0; b < nc; ++b) {
+      const double c = cost(comp_rows[a], comp_cols[b]);
+      if (std::isfinite(c) && c <= gate) square(a, b) = c;
+    }
+    square(a, nc + a) = gate;
+  }
+  for (int b = 0; b < nc; ++b) square(nr + b, b) = gate;
+  square.bottomRightCorner(nc, nr).setZero();
+  const std::vector<int> solution = hungarian_rows_le_cols(square);
+  for (int a = 0; a < nr; ++a) {
+    if (solution[a] < nc) col_of_row[comp_rows[a]] = comp_cols[solution[a]];
+  }
+}
+
+}  // namespace
+
 std::vector<int> solve_gated_assignment(const Eigen::MatrixXd& cost, double gate) {
   const int rows = static_cast<int>(cost.rows());
   const int cols = static_cast<int>(cost.cols());
@@ -143,26 +173,7 @@ std::vector<int> solve_gated_assignment(const Eigen::MatrixXd& cost, double gate
         comp_cols.push_back(members[k] - rows);
       }
     }
-    const int nr = static_cast<int>(comp_rows.size());
-    const int nc = static_cast<int>(comp_cols.size());
-    // Square problem: real pairs top-left, "row unpaired" dummies top-right (diagonal at the
-    // gate), "column unpaired" dummies bottom-left, dummy-dummy pairs free. Forbidden entries
-    // cost more than leaving everything unpaired, so no optimum uses them.
-    const int n = nr + nc;
-    const double forbidden = 2.0 * gate * n + 1.0;
-    Eigen::MatrixXd square = Eigen::MatrixXd::Constant(n, n, forbidden);
-    for (int a = 0; a < nr; ++a) {
-      for (int b = 0; b < nc; ++b) {
-        if (allowed(comp_rows[a], comp_cols[b])) square(a, b) = cost(comp_rows[a], comp_cols[b]);
-      }
-      square(a, nc + a) = gate;
-    }
-    for (int b = 0; b < nc; ++b) square(nr + b, b) = gate;
-    square.bottomRightCorner(nc, nr).setZero();
-    const std::vector<int> solution = hungarian_rows_le_cols(square);
-    for (int a = 0; a < nr; ++a) {
-      if (solution[a] < nc) col_of_row[comp_rows[a]] = comp_cols[solution[a]];
-    }
+    solve_component(cost, gate, comp_rows, comp_cols, col_of_row);
   }
   return col_of_row;
 }
