@@ -162,32 +162,13 @@ void DynamicObjectFilter::release_front() {
   }
 }
 
-const FilterResult& DynamicObjectFilter::process(
-    const core::OrganizedScan& scan, const core::Pose& pose,
-    const std::vector<core::Detection>& detections,
-    const std::vector<tracking::Hypothesis>& hypotheses, const ScanEvidence& evidence) {
-  if (evidence.segments != nullptr && evidence.segments->size() != scan.size()) {
-    throw core::InputError("mapping: " + std::to_string(evidence.segments->size()) +
-                           " segment labels for a scan of " + std::to_string(scan.size()) +
-                           " cells; the filter was left unchanged");
-  }
-  for (const auto& h : hypotheses) {
-    if (h.detection >= static_cast<int>(detections.size())) {
-      throw core::InputError("mapping: hypothesis " + std::to_string(h.id) + " names detection " +
-                             std::to_string(h.detection) + " of " +
-                             std::to_string(detections.size()) + "; the filter was left unchanged");
-    }
-  }
-  const std::uint64_t sequence = next_sequence_++;
-  result_ = FilterResult{};
-  result_.sequence = sequence;
-  evicted_.clear();
+LoggedScan& DynamicObjectFilter::log_scan(const core::OrganizedScan& scan, const core::Pose& pose,
+                                          std::uint64_t sequence) {
   // Reuse the buffers of a scan released by the previous call: no page faults per scan.
   LoggedScan logged;
   if (!released_.empty()) logged = std::move(released_.back());
   released_.clear();
 
-  // Log the scan's valid points in the world frame.
   logged.sequence = sequence;
   logged.stamp_ns = scan.stamp_ns;
   logged.pose = pose;
@@ -220,69 +201,98 @@ const FilterResult& DynamicObjectFilter::process(
   }
   logged.update_bounds();
   log_.push_back(std::move(logged));
-  LoggedScan& current = log_.back();
+  return log_.back();
+}
 
-  for (const auto& h : hypotheses) {
-    ObjectHistory& object = objects_[h.id];
-    object.touched = sequence;
-    const bool detected = h.detection >= 0;
-    if (!removable(h)) {
-      // Remember where it stood: these points go if it turns out to be dynamic later.
-      object.static_boxes.push_back({sequence, h.box});
-      if (detected) {
-        object.seen = true;
-        object.last_seen = {sequence, h.box};
-      }
-      continue;
+void DynamicObjectFilter::update_object(const tracking::Hypothesis& h,
+                                        const std::vector<core::Detection>& detections,
+                                        LoggedScan& current, std::uint64_t sequence) {
+  ObjectHistory& object = objects_[h.id];
+  object.touched = sequence;
+  const bool detected = h.detection >= 0;
+  if (!removable(h)) {
+    // Remember where it stood: these points go if it turns out to be dynamic later.
+    object.static_boxes.push_back({sequence, h.box});
+    if (detected) {
+      object.seen = true;
+      object.last_seen = {sequence, h.box};
     }
-    if (!object.removing) {
-      // Just turned dynamic (or removable): remove it from every scan of its static era.
-      object.removing = true;
-      for (const auto& b : object.static_boxes) remove_box(b.sequence, b.box);
-      object.static_boxes.clear();
-      if (!object.expired_static.empty()) {
-        result_.map_voxels_removed += map_.remove_inside(inflate(object.expired_static));
-        object.expired_static = core::Box3{};
-      }
-    }
-    if (!detected) {
-      object.gap.push_back({sequence, h.box});
-      continue;
-    }
-    // The object's cells: the detector's and those the completion added (its legs).
-    for (const auto* cells :
-         {&detections[h.detection].indices, &detections[h.detection].completion}) {
-      for (const auto cell : *cells) {
-        if (cell >= point_of_cell_.size() || point_of_cell_[cell] < 0) continue;
-        const auto p = static_cast<std::size_t>(point_of_cell_[cell]);
-        if (current.removed[p]) continue;
-        current.removed[p] = 1;
-        ++current.removed_count;
-        result_.removed_cells.push_back(cell);
-      }
-    }
-    if (config_.object_margin_m > 0.0) remove_object_box(current, h.box);
-    if (!object.gap.empty()) {
-      // Recovered after a gap: its points in the missed scans lie in the predicted boxes or,
-      // when it turned meanwhile, along the straight way from where it was last seen to here.
-      for (const auto& g : object.gap) {
-        remove_box(g.sequence, g.box);
-        if (object.seen && object.last_seen.sequence < g.sequence) {
-          const double t = static_cast<double>(g.sequence - object.last_seen.sequence) /
-                           static_cast<double>(sequence - object.last_seen.sequence);
-          const auto tf = static_cast<float>(t);
-          const core::Box3& a = object.last_seen.box;
-          if (!a.empty() && !h.box.empty()) {
-            remove_box(g.sequence, {(1.0f - tf) * a.min + tf * h.box.min,
-                                    (1.0f - tf) * a.max + tf * h.box.max});
-          }
-        }
-      }
-      object.gap.clear();
-    }
-    object.seen = true;
-    object.last_seen = {sequence, h.box};
+    return;
   }
+  if (!object.removing) {
+    // Just turned dynamic (or removable): remove it from every scan of its static era.
+    object.removing = true;
+    for (const auto& b : object.static_boxes) remove_box(b.sequence, b.box);
+    object.static_boxes.clear();
+    if (!object.expired_static.empty()) {
+      result_.map_voxels_removed += map_.remove_inside(inflate(object.expired_static));
+      object.expired_static = core::Box3{};
+    }
+  }
+  if (!detected) {
+    object.gap.push_back({sequence, h.box});
+    return;
+  }
+  // The object's cells: the detector's and those the completion added (its legs).
+  for (const auto* cells :
+       {&detections[h.detection].indices, &detections[h.detection].completion}) {
+    for (const auto cell : *cells) {
+      if (cell >= point_of_cell_.size() || point_of_cell_[cell] < 0) continue;
+      const auto p = static_cast<std::size_t>(point_of_cell_[cell]);
+      if (current.removed[p]) continue;
+      current.removed[p] = 1;
+      ++current.removed_count;
+      result_.removed_cells.push_back(cell);
+    }
+  }
+  if (config_.object_margin_m > 0.0) remove_object_box(current, h.box);
+  if (!object.gap.empty()) remove_gap(object, h.box, sequence);
+  object.seen = true;
+  object.last_seen = {sequence, h.box};
+}
+
+void DynamicObjectFilter::remove_gap(ObjectHistory& object, const core::Box3& box,
+                                     std::uint64_t sequence) {
+  // Its points in the missed scans lie in the predicted boxes or, when it turned meanwhile,
+  // along the straight way from where it was last seen to here.
+  for (const auto& g : object.gap) {
+    remove_box(g.sequence, g.box);
+    if (object.seen && object.last_seen.sequence < g.sequence) {
+      const double t = static_cast<double>(g.sequence - object.last_seen.sequence) /
+                       static_cast<double>(sequence - object.last_seen.sequence);
+      const auto tf = static_cast<float>(t);
+      const core::Box3& a = object.last_seen.box;
+      if (!a.empty() && !box.empty()) {
+        remove_box(g.sequence,
+                   {(1.0f - tf) * a.min + tf * box.min, (1.0f - tf) * a.max + tf * box.max});
+      }
+    }
+  }
+  object.gap.clear();
+}
+
+const FilterResult& DynamicObjectFilter::process(
+    const core::OrganizedScan& scan, const core::Pose& pose,
+    const std::vector<core::Detection>& detections,
+    const std::vector<tracking::Hypothesis>& hypotheses, const ScanEvidence& evidence) {
+  if (evidence.segments != nullptr && evidence.segments->size() != scan.size()) {
+    throw core::InputError("mapping: " + std::to_string(evidence.segments->size()) +
+                           " segment labels for a scan of " + std::to_string(scan.size()) +
+                           " cells; the filter was left unchanged");
+  }
+  for (const auto& h : hypotheses) {
+    if (h.detection >= static_cast<int>(detections.size())) {
+      throw core::InputError("mapping: hypothesis " + std::to_string(h.id) + " names detection " +
+                             std::to_string(h.detection) + " of " +
+                             std::to_string(detections.size()) + "; the filter was left unchanged");
+    }
+  }
+  const std::uint64_t sequence = next_sequence_++;
+  result_ = FilterResult{};
+  result_.sequence = sequence;
+  evicted_.clear();
+  LoggedScan& current = log_scan(scan, pose, sequence);
+  for (const auto& h : hypotheses) update_object(h, detections, current, sequence);
   // Forget deleted hypotheses.
   std::erase_if(objects_, [&](const auto& entry) { return entry.second.touched != sequence; });
 

@@ -131,6 +131,17 @@ class DynamicObjectFilter {
   };
 
   void remove_box(std::uint64_t sequence, const core::Box3& box);
+  // Appends the scan's valid points (world frame) to the log as scan `sequence`, reusing the
+  // buffers of a released scan; fills point_of_cell_.
+  LoggedScan& log_scan(const core::OrganizedScan& scan, const core::Pose& pose,
+                       std::uint64_t sequence);
+  // One hypothesis of the scan just logged: remembers a static one's box; removes a removable
+  // one's points (its cells, its grown box, its static era, the gaps it coasted through).
+  void update_object(const tracking::Hypothesis& h, const std::vector<core::Detection>& detections,
+                     LoggedScan& current, std::uint64_t sequence);
+  // A recovered object's points in the scans it was missed in: the predicted boxes, and the
+  // straight way from where it was last seen to box.
+  void remove_gap(ObjectHistory& object, const core::Box3& box, std::uint64_t sequence);
   // Whether the hypothesis' points leave the scans (mapping.remove).
   [[nodiscard]] bool removable(const tracking::Hypothesis& h) const;
   // Removes the points inside a measured dynamic box grown by object_margin_m (not downward).
