@@ -11,7 +11,12 @@ install(TARGETS ringtrack_all EXPORT ringtrackTargets)
 install(FILES ${PROJECT_BINARY_DIR}/generated/ringtrack/version.hpp
         DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/ringtrack)
 if(RINGTRACK_SANITIZE)
-  # Instrumented libraries need the sanitizer runtimes in whatever links them.
+  # Instrumented libraries need instrumented users, compiled as well as linked: besides the
+  # runtimes, Eigen picks its allocator by __SANITIZE_ADDRESS__ (its own aligned malloc under
+  # ASan, plain malloc otherwise), so a matrix the library allocates and a user's inline code
+  # frees (~Pipeline) is a bad free (package_downstream caught it).
+  target_compile_options(ringtrack_core INTERFACE
+                         $<INSTALL_INTERFACE:-fsanitize=address,undefined>)
   target_link_options(ringtrack_core INTERFACE $<INSTALL_INTERFACE:-fsanitize=address,undefined>)
 endif()
 
