@@ -37,7 +37,6 @@ from ._ringtrack import (  # noqa: F401  (re-exported)
 )
 
 
-
 def _config_dir():
     """The shipped config/: the source tree's for the build tree's package, else the one
     `cmake --install` put in <prefix>/share/ringtrack/ (an installed package never reads a
