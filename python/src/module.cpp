@@ -28,7 +28,7 @@ PYBIND11_MODULE(_ringtrack, m) {
   m.attr("_build_package_dir") = RINGTRACK_BUILD_PACKAGE_DIR;
   m.attr("_installed_config_dir") = RINGTRACK_INSTALLED_CONFIG_DIR;
   static py::exception<ringtrack::core::ConfigError> config_error(m, "ConfigError",
-                                                                   PyExc_ValueError);
+                                                                  PyExc_ValueError);
   static py::exception<ringtrack::core::InputError> input_error(m, "InputError", PyExc_ValueError);
   py::register_exception_translator([](std::exception_ptr p) {
     try {
