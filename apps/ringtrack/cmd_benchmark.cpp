@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "data_dirs.hpp"
 #include "output_rows.hpp"
 #include "plots.hpp"
 #include "ringtrack/core/error.hpp"
@@ -301,7 +302,7 @@ void run_benchmark(const BenchmarkOptions& o) {
   plan.builtins_given = o.scenarios_given;
   plan.scenario_files = o.scenario_files;
   if (o.validation) {
-    const fs::path dir = fs::path(RINGTRACK_CONFIG_DIR) / "validation";
+    const fs::path dir = config_dir() / "validation";
     for (const std::string& f : experiment::scenario_files_in(dir))
       plan.scenario_files.push_back(f);
   }

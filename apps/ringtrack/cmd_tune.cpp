@@ -12,14 +12,16 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "data_dirs.hpp"
 
 namespace ringtrack::cli {
 namespace {
 
 [[noreturn]] void exec_tuner(const std::vector<std::string>& args) {
   const char* python = "/usr/bin/python3";
-  // The build tree's package first, so that the tuner and this binary are the same version.
-  std::string path = RINGTRACK_PYTHON_DIR;
+  // This binary's own package first (the build tree's, or the one installed with it), so that
+  // the tuner and this binary are the same version.
+  std::string path = python_dir().string();
   if (const char* old = std::getenv("PYTHONPATH"); old != nullptr && *old != '\0') {
     path.push_back(':');
     path.append(old);

@@ -3,6 +3,8 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "data_dirs.hpp"
+
 namespace ringtrack::cli {
 namespace {
 
@@ -25,7 +27,7 @@ std::string quote(const std::string& s) {
 }  // namespace
 
 bool run_plot_script(const std::string& script_name, const std::vector<fs::path>& args) {
-  const fs::path script = fs::path(RINGTRACK_SCRIPTS_DIR) / script_name;
+  const fs::path script = scripts_dir() / script_name;
   const char* python = "/usr/bin/python3";
   if (!fs::exists(python) || !fs::exists(script)) {
     std::cerr << "ringtrack: warning: no plot: " << (fs::exists(python) ? script.string() : python)

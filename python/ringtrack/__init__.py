@@ -6,6 +6,10 @@ for Foxglove. The tuner is
 `python3 -m ringtrack.tune` (also `ringtrack tune`).
 """
 
+import os as _os
+import pathlib as _pathlib
+
+from . import _ringtrack
 from ._ringtrack import (  # noqa: F401  (re-exported)
     Config,
     ConfigError,
@@ -33,6 +37,20 @@ from ._ringtrack import (  # noqa: F401  (re-exported)
     scenario_files_in,
     scenarios,
 )
+
+
+def _config_dir():
+    """The shipped config/: the source tree's for the build tree's package, else the one
+    `cmake --install` put in <prefix>/share/ringtrack/ (an installed package never reads a
+    source tree)."""
+    here = _pathlib.Path(__file__).resolve().parent
+    if here == _pathlib.Path(_ringtrack._build_package_dir).resolve():
+        return _ringtrack._source_config_dir
+    return _os.path.normpath(here / _ringtrack._installed_config_dir)
+
+
+config_dir = _config_dir()
+"""Where the default search space (tune_space.yaml) and the validation scenarios are."""
 
 
 def config_to_dict(config):

@@ -16,6 +16,7 @@ import sys
 import time
 
 from . import _ringtrack as rt
+from . import config_dir
 from . import tuning
 from .tuning import TuneError
 
@@ -39,7 +40,7 @@ def parse_args(argv):
         prog="ringtrack tune",
         description="Tune the pipeline's parameters on simulated scenarios (Optuna TPE; "
         "docs/tuning.md).")
-    p.add_argument("--space", default=os.path.join(rt.config_dir, "tune_space.yaml"),
+    p.add_argument("--space", default=os.path.join(config_dir, "tune_space.yaml"),
                    help="search space YAML (default: config/tune_space.yaml)")
     p.add_argument("--trials", type=int, default=50,
                    help="completed trials per study (per fold with --loocv); default 50")

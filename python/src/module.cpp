@@ -21,9 +21,12 @@ PYBIND11_MODULE(_ringtrack, m) {
   using namespace ringtrack::python;
   m.doc() = "ringtrack: detect and track people in spinning-LiDAR scans (C++ bindings)";
   m.attr("__version__") = ringtrack::kVersion;
-  // Where the shipped configuration lives (default search space, validation scenarios): the
-  // source tree's config/ (docs/python.md, "Installing").
-  m.attr("config_dir") = RINGTRACK_CONFIG_DIR;
+  // What ringtrack.config_dir (__init__.py) chooses from: the build tree's package reads the
+  // source tree's config/, an installed one <prefix>/share/ringtrack/config, found relative to the
+  // package so that the prefix can move (docs/python.md, "Installing").
+  m.attr("_source_config_dir") = RINGTRACK_SOURCE_CONFIG_DIR;
+  m.attr("_build_package_dir") = RINGTRACK_BUILD_PACKAGE_DIR;
+  m.attr("_installed_config_dir") = RINGTRACK_INSTALLED_CONFIG_DIR;
   static py::exception<ringtrack::core::ConfigError> config_error(m, "ConfigError",
                                                                   PyExc_ValueError);
   static py::exception<ringtrack::core::InputError> input_error(m, "InputError", PyExc_ValueError);
