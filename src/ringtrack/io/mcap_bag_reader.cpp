@@ -32,10 +32,8 @@ std::string list_topics(const std::vector<RosbagTopicInfo>& topics) {
 }  // namespace
 
 bool is_mcap_bag(const fs::path& path) {
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) {
-    if (fs::exists(path / "metadata.yaml", ec))
-      return rosbag2_storage(path / "metadata.yaml") == "mcap";
+  if (is_folder(path)) {
+    if (is_file(path / "metadata.yaml")) return rosbag2_storage(path / "metadata.yaml") == "mcap";
     return !mcap_files_in(path).empty();
   }
   return is_mcap_file(path);

@@ -4,6 +4,7 @@
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/mcap_bag_reader.hpp"
+#include "ringtrack/io/paths.hpp"
 #include "ringtrack/io/rosbag1_reader.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
 
@@ -124,9 +125,9 @@ bool is_rosbag1_file(const fs::path& path) {
 
 bool is_rosbag2_path(const fs::path& path) {
   if (is_mcap_bag(path)) return true;
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) {
-    if (fs::exists(path / "metadata.yaml", ec)) return true;
+  if (is_folder(path)) {
+    if (is_file(path / "metadata.yaml")) return true;
+    std::error_code ec;
     for (const auto& entry : fs::directory_iterator(path, ec)) {
       if (entry.path().extension() == ".db3") return true;
     }
