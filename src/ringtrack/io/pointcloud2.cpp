@@ -167,15 +167,187 @@ PointCloud2 parse_pointcloud2(std::span<const std::uint8_t> message, RosSerializ
   return c;
 }
 
-PointCloud2Organizer::PointCloud2Organizer(PointCloud2Options options)
-    : options_(std::move(options)) {
-  if (!(options_.scan_rate_hz >= 1.0 && options_.scan_rate_hz <= 50.0)) {
-    throw core::ConfigError("point cloud scan rate " + std::to_string(options_.scan_rate_hz) +
+namespace {
+
+// The scan rate and cut azimuth the grid is laid out with; throws core::ConfigError.
+void check_grid_options(const PointCloud2Options& options) {
+  if (!(options.scan_rate_hz >= 1.0 && options.scan_rate_hz <= 50.0)) {
+    throw core::ConfigError("point cloud scan rate " + std::to_string(options.scan_rate_hz) +
                             " Hz: expected 1..50");
   }
-  if (!std::isfinite(options_.cut_azimuth_deg)) {
+  if (!std::isfinite(options.cut_azimuth_deg)) {
     throw core::ConfigError("point cloud cut azimuth: expected a finite number of degrees");
   }
+}
+
+// The packet decoder's grid for points whose ring is known: a point's cell is its ring and the
+// column of its firing azimuth; a cell hit twice keeps the nearer point. Shared by clouds with a
+// ring field (or organized rows) and by organize_points.
+class RingGrid {
+ public:
+  RingGrid(const core::SensorModel& model, const PointCloud2Options& options,
+           PointCloud2Stats& stats)
+      : model_(model),
+        options_(options),
+        stats_(stats),
+        columns_(model.columns()),
+        step_deg_(360.0 / columns_),
+        period_ns_(1e9 / (options.scan_rate_hz * columns_)),
+        scan_(model.rings(), columns_),
+        has_azimuth_(static_cast<std::size_t>(columns_), 0),
+        first_ns_(static_cast<std::size_t>(columns_), kUnset),
+        min_range_(static_cast<float>(model.min_range_m)),
+        max_range_(static_cast<float>(model.max_range_m)) {}
+
+  // A return of `ring` at x y z (sensor frame) with its measured range (finite, > 0) and, when
+  // the cloud has one, its time.
+  void place(int ring, double x, double y, double z, double range, float intensity,
+             std::optional<std::int64_t> time_ns) {
+    const auto r = static_cast<std::size_t>(ring);
+    // The azimuth of the point's firing sequence: undo the laser's azimuth offset and the
+    // rotation during its firing delay (ringtrack azimuths turn against the sensor).
+    const double firing_rad = std::atan2(y, x) - model_.azimuth_offset_rad[r] +
+                              kTwoPi * options_.scan_rate_hz * model_.firing_offset_us[r] * 1e-6;
+    const double velodyne_deg = -firing_rad * 180.0 / std::numbers::pi;
+    const double rel = wrap360(velodyne_deg - options_.cut_azimuth_deg);
+    const int column = std::min(columns_ - 1, static_cast<int>(rel / step_deg_));
+    const auto c = static_cast<std::size_t>(column);
+    if (has_azimuth_[c] == 0) {
+      has_azimuth_[c] = 1;
+      scan_.column_azimuth_rad[c] = velodyne_to_ringtrack_azimuth_rad(velodyne_deg);
+    }
+    if (time_ns) first_ns_[c] = std::min(first_ns_[c], *time_ns);
+    const std::size_t i = scan_.index(ring, column);
+    const auto range_f = static_cast<float>(range);
+    if (scan_.valid(i)) {
+      ++stats_.dropped_points;
+      if (range_f >= scan_.range_m(i)) return;
+    }
+    if (range_f < min_range_ || range_f > max_range_) {
+      if (!scan_.valid(i)) {
+        scan_.set_invalid(
+            ring, column,
+            range_f < min_range_ ? core::ReturnStatus::kTooClose : core::ReturnStatus::kTooFar);
+      }
+      return;
+    }
+    scan_.set_return(
+        ring, column, range_f, intensity,
+        Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)));
+  }
+
+  // The scan. Columns without points: nominal azimuths; stamps continued from the nearest timed
+  // column at the nominal column period (or from the cloud's stamp without times).
+  core::OrganizedScan finish(std::int64_t cloud_stamp_ns) {
+    int anchor = -1;  // the last column with a time, or the first one for the columns before it
+    for (int c = 0; c < columns_; ++c) {
+      const auto u = static_cast<std::size_t>(c);
+      if (has_azimuth_[u] == 0) {
+        scan_.column_azimuth_rad[u] =
+            velodyne_to_ringtrack_azimuth_rad(options_.cut_azimuth_deg + (c + 0.5) * step_deg_);
+      }
+      if (first_ns_[u] != kUnset && anchor < 0) anchor = c;
+    }
+    for (int c = 0; c < columns_; ++c) {
+      const auto u = static_cast<std::size_t>(c);
+      if (first_ns_[u] != kUnset) {
+        anchor = c;
+        scan_.column_stamp_ns[u] = first_ns_[u];
+      } else if (anchor < 0) {
+        scan_.column_stamp_ns[u] = cloud_stamp_ns + std::llround(c * period_ns_);
+      } else {
+        scan_.column_stamp_ns[u] =
+            first_ns_[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns_);
+      }
+    }
+    scan_.stamp_ns = scan_.column_stamp_ns[0];
+    return std::move(scan_);
+  }
+
+ private:
+  static constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
+  const core::SensorModel& model_;
+  const PointCloud2Options& options_;
+  PointCloud2Stats& stats_;
+  int columns_;
+  double step_deg_;
+  double period_ns_;
+  core::OrganizedScan scan_;
+  std::vector<std::uint8_t> has_azimuth_;
+  std::vector<std::int64_t> first_ns_;
+  float min_range_, max_range_;
+};
+
+// Whether an organized cloud without a ring field holds its top ring in row 0: drivers differ
+// (velodyne_pointcloud puts the bottom ring first, image-like drivers the top).
+bool top_row_first(const PointCloud2& cloud, const PointField& fx, const PointField& fy,
+                   const PointField& fz) {
+  const auto row_elevation = [&](std::uint32_t r) {
+    double sum = 0;
+    int n = 0;
+    for (std::uint32_t c = 0; c < cloud.width; ++c) {
+      const double x = cloud.value(fx, r, c);
+      const double y = cloud.value(fy, r, c);
+      const double z = cloud.value(fz, r, c);
+      if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) continue;
+      if (x == 0 && y == 0 && z == 0) continue;
+      sum += std::atan2(z, std::hypot(x, y));
+      ++n;
+    }
+    return n > 0 ? std::optional<double>(sum / n) : std::nullopt;
+  };
+  std::optional<double> low;
+  std::optional<double> high;
+  for (std::uint32_t r = 0; r < cloud.height && !low; ++r) low = row_elevation(r);
+  for (std::uint32_t r = cloud.height; r-- > 0 && !high;) high = row_elevation(r);
+  return low && high && *low > *high;
+}
+
+}  // namespace
+
+core::OrganizedScan organize_points(const RingedPoints& points, const core::SensorModel& model,
+                                    const PointCloud2Options& options, PointCloud2Stats* stats) {
+  check_grid_options(options);
+  const std::size_t n = points.xyz.size();
+  const auto check_size = [n](std::size_t size, const char* what) {
+    if (size != n) {
+      throw core::InputError("organize_points: " + std::to_string(size) + " " + what + " for " +
+                             std::to_string(n) + " points");
+    }
+  };
+  check_size(points.ring.size(), "rings");
+  if (!points.intensity.empty()) check_size(points.intensity.size(), "intensities");
+  if (!points.time_ns.empty()) check_size(points.time_ns.size(), "times");
+  PointCloud2Stats own;
+  PointCloud2Stats& counts = stats != nullptr ? *stats : own;
+  RingGrid grid(model, options, counts);
+  ++counts.clouds;
+  for (std::size_t k = 0; k < n; ++k) {
+    ++counts.points;
+    const double x = points.xyz[k].x(), y = points.xyz[k].y(), z = points.xyz[k].z();
+    if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z) ||
+        (x == 0 && y == 0 && z == 0)) {
+      ++counts.empty_points;
+      continue;
+    }
+    const int ring = points.ring[k];
+    if (ring >= model.rings()) {
+      ++counts.bad_ring_points;
+      continue;
+    }
+    const double dz = z - model.vertical_offset_m[static_cast<std::size_t>(ring)];
+    const double range = std::sqrt(x * x + y * y + dz * dz);
+    const float intensity = points.intensity.empty() ? 0.0f : points.intensity[k];
+    const auto time =
+        points.time_ns.empty() ? std::nullopt : std::optional<std::int64_t>(points.time_ns[k]);
+    grid.place(ring, x, y, z, range, intensity, time);
+  }
+  return grid.finish(points.stamp_ns);
+}
+
+PointCloud2Organizer::PointCloud2Organizer(PointCloud2Options options)
+    : options_(std::move(options)) {
+  check_grid_options(options_);
   if (!options_.model.empty()) {
     try {
       model_ = core::SensorModel::by_name(options_.model, options_.scan_rate_hz);
@@ -291,39 +463,9 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
     fail("has " + std::to_string(cloud.height) + " rows, expected one per ring of the " +
          model.name + " (" + std::to_string(rings) + ") or a '" + options_.ring_field + "' field");
   }
-  bool flip_rows = false;
-  if (fring == nullptr) {
-    // Drivers differ: velodyne_pointcloud puts the bottom ring first, image-like drivers the top.
-    const auto row_elevation = [&](std::uint32_t r) {
-      double sum = 0;
-      int n = 0;
-      for (std::uint32_t c = 0; c < cloud.width; ++c) {
-        const double x = cloud.value(*fx, r, c);
-        const double y = cloud.value(*fy, r, c);
-        const double z = cloud.value(*fz, r, c);
-        if (!std::isfinite(x) || !std::isfinite(y) || !std::isfinite(z)) continue;
-        if (x == 0 && y == 0 && z == 0) continue;
-        sum += std::atan2(z, std::hypot(x, y));
-        ++n;
-      }
-      return n > 0 ? std::optional<double>(sum / n) : std::nullopt;
-    };
-    std::optional<double> low;
-    std::optional<double> high;
-    for (std::uint32_t r = 0; r < cloud.height && !low; ++r) low = row_elevation(r);
-    for (std::uint32_t r = cloud.height; r-- > 0 && !high;) high = row_elevation(r);
-    flip_rows = low && high && *low > *high;
-  }
+  const bool flip_rows = fring == nullptr && top_row_first(cloud, *fx, *fy, *fz);
 
-  const int columns = model.columns();
-  const double step_deg = 360.0 / columns;
-  const double period_ns = 1e9 / (options_.scan_rate_hz * columns);
-  core::OrganizedScan scan(rings, columns);
-  std::vector<std::uint8_t> has_azimuth(static_cast<std::size_t>(columns), 0);
-  std::vector<std::int64_t> first_ns(static_cast<std::size_t>(columns),
-                                     std::numeric_limits<std::int64_t>::max());
-  const auto min_range = static_cast<float>(model.min_range_m);
-  const auto max_range = static_cast<float>(model.max_range_m);
+  RingGrid grid(model, options_, stats_);
   ++stats_.clouds;
   for (std::uint32_t row = 0; row < point_rows; ++row) {
     for (std::uint32_t col = 0; col < cloud.width; ++col) {
@@ -347,32 +489,20 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
       } else {
         ring = flip_rows ? rings - 1 - static_cast<int>(row) : static_cast<int>(row);
       }
-      const auto r = static_cast<std::size_t>(ring);
       // The measured distance: the driver's own, else from the beam origin (the point less the
       // ring's vertical offset), as the packet decoder reports it.
-      const double dz = z - model.vertical_offset_m[r];
+      const double dz = z - model.vertical_offset_m[static_cast<std::size_t>(ring)];
       const double range = fdistance != nullptr ? cloud.value(*fdistance, row, col)
                                                 : std::sqrt(x * x + y * y + dz * dz);
       if (!std::isfinite(range) || range <= 0.0) {
         ++stats_.empty_points;
         continue;
       }
-      // The azimuth of the point's firing sequence: undo the laser's azimuth offset and the
-      // rotation during its firing delay (ringtrack azimuths turn against the sensor).
-      const double firing_rad = std::atan2(y, x) - model.azimuth_offset_rad[r] +
-                                kTwoPi * options_.scan_rate_hz * model.firing_offset_us[r] * 1e-6;
-      const double velodyne_deg = -firing_rad * 180.0 / std::numbers::pi;
-      const double rel = wrap360(velodyne_deg - options_.cut_azimuth_deg);
-      const int column = std::min(columns - 1, static_cast<int>(rel / step_deg));
-      const auto c = static_cast<std::size_t>(column);
-      if (has_azimuth[c] == 0) {
-        has_azimuth[c] = 1;
-        scan.column_azimuth_rad[c] = velodyne_to_ringtrack_azimuth_rad(velodyne_deg);
-      }
+      std::optional<std::int64_t> time;
       if (ftime != nullptr) {
         const double value = cloud.value(*ftime, row, col);
-        const auto t = point_time_ns(*ftime, value, cloud.stamp_ns);
-        if (!t) {
+        time = point_time_ns(*ftime, value, cloud.stamp_ns);
+        if (!time) {
           std::ostringstream what;
           what << where << ": point (row " << row << ", column " << col << ") has time field '"
                << ftime->name << "' = " << value
@@ -380,54 +510,12 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
                   "ns of the epoch)";
           throw core::InputError(what.str());
         }
-        first_ns[c] = std::min(first_ns[c], *t);
-      }
-      const std::size_t i = scan.index(ring, column);
-      const auto range_f = static_cast<float>(range);
-      if (scan.valid(i)) {
-        ++stats_.dropped_points;
-        if (range_f >= scan.range_m(i)) continue;
-      }
-      if (range_f < min_range || range_f > max_range) {
-        if (!scan.valid(i)) {
-          scan.set_invalid(
-              ring, column,
-              range_f < min_range ? core::ReturnStatus::kTooClose : core::ReturnStatus::kTooFar);
-        }
-        continue;
       }
       const float intensity = fi != nullptr ? static_cast<float>(cloud.value(*fi, row, col)) : 0.0f;
-      scan.set_return(
-          ring, column, range_f, intensity,
-          Eigen::Vector3f(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)));
+      grid.place(ring, x, y, z, range, intensity, time);
     }
   }
-  // Columns without points: nominal azimuths; stamps continued from the nearest timed column at
-  // the nominal column period (or from the header stamp without a time field).
-  constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
-  int anchor = -1;  // the last column with a time, or the first one for the columns before it
-  for (int c = 0; c < columns; ++c) {
-    const auto u = static_cast<std::size_t>(c);
-    if (has_azimuth[u] == 0) {
-      scan.column_azimuth_rad[u] =
-          velodyne_to_ringtrack_azimuth_rad(options_.cut_azimuth_deg + (c + 0.5) * step_deg);
-    }
-    if (first_ns[u] != kUnset && anchor < 0) anchor = c;
-  }
-  for (int c = 0; c < columns; ++c) {
-    const auto u = static_cast<std::size_t>(c);
-    if (first_ns[u] != kUnset) {
-      anchor = c;
-      scan.column_stamp_ns[u] = first_ns[u];
-    } else if (anchor < 0) {
-      scan.column_stamp_ns[u] = cloud.stamp_ns + std::llround(c * period_ns);
-    } else {
-      scan.column_stamp_ns[u] =
-          first_ns[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns);
-    }
-  }
-  scan.stamp_ns = scan.column_stamp_ns[0];
-  return scan;
+  return grid.finish(cloud.stamp_ns);
 }
 
 }  // namespace ringtrack::io

@@ -86,6 +86,24 @@ struct PointCloud2Stats {
   core::CloudOrganizeTotals ringless;
 };
 
+/// Points that already carry their ring, as many drivers and datasets hold them (sensor frame).
+struct RingedPoints {
+  std::span<const Eigen::Vector3f> xyz;   ///< metres
+  std::span<const std::uint16_t> ring;    ///< per point, 0 = bottom ring of the model
+  std::span<const float> intensity;       ///< per point, or empty (0)
+  std::span<const std::int64_t> time_ns;  ///< per point, absolute, or empty (nominal column times)
+  std::int64_t stamp_ns{0};               ///< the cloud's stamp (the first column's without times)
+};
+
+/// Organizes points with rings into the model's rings x columns exactly as PointCloud2Organizer
+/// does for a cloud with a ring field (column by firing azimuth clockwise from
+/// options.cut_azimuth_deg, range from the ring's beam origin, the nearer point kept per cell),
+/// for users who already have points in memory. options.model and ring_field are not used.
+/// Throws core::InputError when the spans' sizes differ. Counts into stats when given.
+core::OrganizedScan organize_points(const RingedPoints& points, const core::SensorModel& model,
+                                    const PointCloud2Options& options = {},
+                                    PointCloud2Stats* stats = nullptr);
+
 /// Turns point clouds into OrganizedScans of the sensor model's rings x columns. A point's
 /// ring is its ring field, or, without one, its row of an organized cloud (rows ordered bottom
 /// to top by their points' elevations). Its column is its firing azimuth (the point's azimuth

@@ -241,6 +241,91 @@ TEST(PointCloud2, CollisionsRangesAndBadRings) {
   EXPECT_EQ(organizer.stats().bad_ring_points, 1u);
 }
 
+// organize_points (points already in memory) gives the scan the organizer makes of the same
+// points as a PointCloud2 with a ring field: the whole shuffled grid plus a collision, a point
+// too close, one too far and a ring the model lacks.
+TEST(PointCloud2, OrganizePointsGivesTheScanOfTheSameCloud) {
+  const double cut = 12.0;
+  const auto model = core::SensorModel::vlp16();
+  auto grid = grid_points(model, cut);
+  std::mt19937 rng(3);
+  std::shuffle(grid.begin(), grid.end(), rng);
+  std::vector<test::TestPoint> tps;
+  for (const auto& g : grid) tps.push_back(g.point);
+  const auto near_copy = [](test::TestPoint p, float scale) {
+    p.x *= scale;
+    p.y *= scale;
+    p.z *= scale;
+    return p;
+  };
+  tps.push_back(near_copy(tps[5], 0.9f));   // the same cell, nearer: replaces it
+  tps.push_back(near_copy(tps[6], 0.01f));  // too close
+  tps.push_back(near_copy(tps[7], 40.0f));  // too far
+  tps.push_back({1, 2, 0.5f, 3, 16, 0});    // ring 16 of a VLP-16
+  const std::int64_t stamp = 7'000'000'000;
+  const auto cloud = test::make_xyzirt_cloud(tps, 1, static_cast<std::uint32_t>(tps.size()), stamp);
+  std::vector<std::uint8_t> bytes;
+  const PointCloud2 c = parse(cloud, test::RosEncoding::kCdr, bytes);
+  PointCloud2Options options;
+  options.cut_azimuth_deg = cut;
+  options.model = "vlp16";
+  PointCloud2Organizer organizer(options);
+  const core::OrganizedScan expected = organizer.organize(c, "test");
+
+  std::vector<Eigen::Vector3f> xyz;
+  std::vector<std::uint16_t> ring;
+  std::vector<float> intensity;
+  std::vector<std::int64_t> time_ns;
+  for (const auto& p : tps) {
+    xyz.emplace_back(p.x, p.y, p.z);
+    ring.push_back(p.ring);
+    intensity.push_back(p.intensity);
+    time_ns.push_back(stamp + std::llround(static_cast<double>(p.time_s) * 1e9));
+  }
+  PointCloud2Stats stats;
+  const core::OrganizedScan scan =
+      organize_points({xyz, ring, intensity, time_ns, stamp}, model, options, &stats);
+  ASSERT_EQ(scan.statuses(), expected.statuses());
+  for (std::size_t i = 0; i < scan.size(); ++i) {
+    if (!expected.valid(i)) continue;  // invalid cells hold NaN
+    ASSERT_EQ(scan.range_m(i), expected.range_m(i)) << "cell " << i;
+    ASSERT_EQ(scan.intensity(i), expected.intensity(i)) << "cell " << i;
+    ASSERT_EQ(scan.point(i), expected.point(i)) << "cell " << i;
+  }
+  EXPECT_EQ(scan.column_azimuth_rad, expected.column_azimuth_rad);
+  ASSERT_EQ(scan.column_stamp_ns.size(), expected.column_stamp_ns.size());
+  for (std::size_t k = 0; k < scan.column_stamp_ns.size(); ++k) {
+    // The cloud's float seconds pass through double conversions: within a nanosecond.
+    EXPECT_NEAR(static_cast<double>(scan.column_stamp_ns[k] - expected.column_stamp_ns[k]), 0.0,
+                1.0);
+  }
+  EXPECT_EQ(stats.points, organizer.stats().points);
+  EXPECT_EQ(stats.dropped_points, organizer.stats().dropped_points);
+  EXPECT_EQ(stats.bad_ring_points, 1u);
+  // The three copies share cells with grid points: the nearer replaces its point, the ones out
+  // of range leave the cell's point in place; all three count as dropped, as for a cloud.
+  EXPECT_EQ(stats.dropped_points, 3u);
+  const std::size_t near_cell = scan.index(grid[5].ring, grid[5].column);
+  EXPECT_NEAR(scan.range_m(near_cell), 0.9f * grid_range(grid[5].ring, grid[5].column), 1e-4f);
+  const std::size_t kept_cell = scan.index(grid[6].ring, grid[6].column);
+  EXPECT_NEAR(scan.range_m(kept_cell), grid_range(grid[6].ring, grid[6].column), 1e-4f);
+
+  // Without times: nominal column stamps from the cloud's stamp.
+  const core::OrganizedScan untimed = organize_points({xyz, ring, {}, {}, stamp}, model, options);
+  EXPECT_EQ(untimed.statuses(), expected.statuses());
+  EXPECT_EQ(untimed.column_stamp_ns[0], stamp);
+  EXPECT_EQ(untimed.intensity(untimed.index(grid[0].ring, grid[0].column)), 0.0f);
+
+  // Sizes that differ name what and how many.
+  try {
+    (void)organize_points({xyz, std::span(ring).first(3), {}, {}, stamp}, model, options);
+    ADD_FAILURE() << "3 rings for all points were accepted";
+  } catch (const core::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("organize_points: 3 rings for"), std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(PointCloud2, CloudsThatCannotBeOrganizedAreClearErrors) {
   std::vector<std::uint8_t> bytes;
   // No ring field and a single row.
