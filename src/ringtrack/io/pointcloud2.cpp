@@ -303,6 +303,37 @@ bool top_row_first(const PointCloud2& cloud, const PointField& fx, const PointFi
   return low && high && *low > *high;
 }
 
+// The time of an organized cloud's point; throws core::InputError naming the point when its time
+// field holds no time.
+std::int64_t cloud_point_time(const PointCloud2& cloud, const PointField& ftime, std::uint32_t row,
+                              std::uint32_t col, const std::string& where) {
+  const double value = cloud.value(ftime, row, col);
+  const auto time = point_time_ns(ftime, value, cloud.stamp_ns);
+  if (!time) {
+    std::ostringstream what;
+    what << where << ": point (row " << row << ", column " << col << ") has time field '"
+         << ftime.name << "' = " << value
+         << ", not a time (expected an offset from the header stamp or a stamp within +-4e18 ns "
+            "of the epoch)";
+    throw core::InputError(what.str());
+  }
+  return *time;
+}
+
+// Rings a cloud holds: one more than its largest ring value (below 1024), or its rows when it
+// has no ring field (an organized cloud: one row per ring).
+int count_rings(const PointCloud2& cloud, const PointField* fring, std::uint32_t point_rows) {
+  if (fring == nullptr) return static_cast<int>(cloud.height);
+  int rings = 0;
+  for (std::uint32_t r = 0; r < point_rows; ++r) {
+    for (std::uint32_t c = 0; c < cloud.width; ++c) {
+      const double v = cloud.value(*fring, r, c);
+      if (v >= 0 && v < 1024) rings = std::max(rings, static_cast<int>(v) + 1);
+    }
+  }
+  return rings;
+}
+
 }  // namespace
 
 core::OrganizedScan organize_points(const RingedPoints& points, const core::SensorModel& model,
@@ -438,18 +469,7 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
   // found a cloud of width 0 and 1.6 billion rows that took 11 s to walk doing nothing).
   const std::uint32_t point_rows = cloud.width == 0 ? 0 : cloud.height;
 
-  // Ring of each row (organized clouds without a ring field).
-  int cloud_rings = 0;
-  if (fring != nullptr) {
-    for (std::uint32_t r = 0; r < point_rows; ++r) {
-      for (std::uint32_t c = 0; c < cloud.width; ++c) {
-        const double v = cloud.value(*fring, r, c);
-        if (v >= 0 && v < 1024) cloud_rings = std::max(cloud_rings, static_cast<int>(v) + 1);
-      }
-    }
-  } else {
-    cloud_rings = static_cast<int>(cloud.height);
-  }
+  const int cloud_rings = count_rings(cloud, fring, point_rows);
   if (!model_) {
     if (cloud_rings > 16) {
       fail("has " + std::to_string(cloud_rings) +
@@ -498,19 +518,9 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
         ++stats_.empty_points;
         continue;
       }
-      std::optional<std::int64_t> time;
-      if (ftime != nullptr) {
-        const double value = cloud.value(*ftime, row, col);
-        time = point_time_ns(*ftime, value, cloud.stamp_ns);
-        if (!time) {
-          std::ostringstream what;
-          what << where << ": point (row " << row << ", column " << col << ") has time field '"
-               << ftime->name << "' = " << value
-               << ", not a time (expected an offset from the header stamp or a stamp within +-4e18 "
-                  "ns of the epoch)";
-          throw core::InputError(what.str());
-        }
-      }
+      const auto time = ftime != nullptr
+                            ? std::optional(cloud_point_time(cloud, *ftime, row, col, where))
+                            : std::nullopt;
       const float intensity = fi != nullptr ? static_cast<float>(cloud.value(*fi, row, col)) : 0.0f;
       grid.place(ring, x, y, z, range, intensity, time);
     }
