@@ -134,10 +134,10 @@ void MotAccumulator::record(MotEventType type, std::int64_t object_id, std::int6
   }
 }
 
-std::vector<MotPair> MotAccumulator::update(std::span<const std::int64_t> object_ids,
-                                            std::span<const std::int64_t> hypothesis_ids,
-                                            const Eigen::MatrixXd& distances,
-                                            std::span<const std::uint8_t> dont_care) {
+void MotAccumulator::check_frame(std::span<const std::int64_t> object_ids,
+                                 std::span<const std::int64_t> hypothesis_ids,
+                                 const Eigen::MatrixXd& distances,
+                                 std::span<const std::uint8_t> dont_care) const {
   const std::int64_t frame = counts_.frames;
   const auto n_obj = static_cast<Eigen::Index>(object_ids.size());
   const auto n_hyp = static_cast<Eigen::Index>(hypothesis_ids.size());
@@ -152,9 +152,6 @@ std::vector<MotPair> MotAccumulator::update(std::span<const std::int64_t> object
                            std::to_string(n_obj) + " objects but " +
                            std::to_string(dont_care.size()) + " don't-care flags");
   }
-  const auto ignored_object = [&](Eigen::Index i) {
-    return !dont_care.empty() && dont_care[static_cast<std::size_t>(i)] != 0;
-  };
   require_unique(object_ids, "object", frame);
   require_unique(hypothesis_ids, "hypothesis", frame);
   for (Eigen::Index i = 0; i < n_obj; ++i) {
@@ -168,97 +165,27 @@ std::vector<MotPair> MotAccumulator::update(std::span<const std::int64_t> object
       }
     }
   }
+}
 
-  // Pairable entries, with NaN for the rest.
-  Eigen::MatrixXd usable(n_obj, n_hyp);
-  for (Eigen::Index i = 0; i < n_obj; ++i) {
-    for (Eigen::Index j = 0; j < n_hyp; ++j) {
-      const double d = distances(i, j);
-      usable(i, j) = pairable(d) ? d : kNaN;
-    }
-  }
-
-  std::vector<Eigen::Index> row_match(static_cast<std::size_t>(n_obj), kUnassigned);
-  std::vector<char> col_taken(static_cast<std::size_t>(n_hyp), 0);
-  std::vector<char> col_ignored(static_cast<std::size_t>(n_hyp), 0);  // matched to don't-care
-  std::vector<MotPair> counted;
-  std::unordered_map<std::int64_t, Eigen::Index> col_of_hypothesis;
-  for (Eigen::Index j = 0; j < n_hyp; ++j) {
-    col_of_hypothesis.emplace(hypothesis_ids[static_cast<std::size_t>(j)], j);
-  }
-  std::vector<ObjectState*> state(static_cast<std::size_t>(n_obj));
-  for (Eigen::Index i = 0; i < n_obj; ++i) {
-    state[static_cast<std::size_t>(i)] = &objects_[object_ids[static_cast<std::size_t>(i)]];
-  }
-
-  const auto commit = [&](Eigen::Index i, Eigen::Index j) {
-    const std::int64_t o = object_ids[static_cast<std::size_t>(i)];
-    const std::int64_t h = hypothesis_ids[static_cast<std::size_t>(j)];
-    ObjectState& s = *state[static_cast<std::size_t>(i)];
-    const bool is_switch = s.last_hypothesis.has_value() && *s.last_hypothesis != h;
-    const double d = usable(i, j);
-    if (ignored_object(i)) {
-      col_ignored[static_cast<std::size_t>(j)] = 1;
-      record(MotEventType::kIgnored, o, h, d);
-    } else if (is_switch) {
-      ++counts_.switches;
-      record(MotEventType::kSwitch, o, h, d);
-    } else {
-      ++counts_.matches;
-      record(MotEventType::kMatch, o, h, d);
-    }
-    if (!ignored_object(i)) {
-      counts_.distance_sum += d;
-      counted.push_back({i, j});
-    }
-    s.last_hypothesis = h;
-    s.last_match_frame = frame;
-    row_match[static_cast<std::size_t>(i)] = j;
-    col_taken[static_cast<std::size_t>(j)] = 1;
+void MotAccumulator::count_unmatched(std::span<const std::int64_t> object_ids,
+                                     std::span<const std::int64_t> hypothesis_ids,
+                                     const Eigen::MatrixXd& usable,
+                                     std::span<const std::uint8_t> dont_care,
+                                     const std::vector<Eigen::Index>& row_match,
+                                     const std::vector<char>& col_taken,
+                                     const std::vector<char>& col_ignored) {
+  const auto n_obj = static_cast<Eigen::Index>(object_ids.size());
+  const auto n_hyp = static_cast<Eigen::Index>(hypothesis_ids.size());
+  const auto ignored_object = [&](Eigen::Index i) {
+    return !dont_care.empty() && dont_care[static_cast<std::size_t>(i)] != 0;
   };
-
-  // 1. Keep correspondences: an object stays with the hypothesis it was last matched to when both
-  //    are present and pairable. When several objects claim one hypothesis, the most recent match
-  //    wins (at most one object was matched to it in any given frame, so there is no tie).
-  std::vector<Eigen::Index> keeper(static_cast<std::size_t>(n_hyp), kUnassigned);
-  for (Eigen::Index i = 0; i < n_obj; ++i) {
-    const ObjectState& s = *state[static_cast<std::size_t>(i)];
-    if (!s.last_hypothesis) continue;
-    const auto it = col_of_hypothesis.find(*s.last_hypothesis);
-    if (it == col_of_hypothesis.end() || std::isnan(usable(i, it->second))) continue;
-    Eigen::Index& k = keeper[static_cast<std::size_t>(it->second)];
-    if (k == kUnassigned ||
-        state[static_cast<std::size_t>(k)]->last_match_frame < s.last_match_frame) {
-      k = i;
-    }
-  }
-  for (Eigen::Index j = 0; j < n_hyp; ++j) {
-    const Eigen::Index i = keeper[static_cast<std::size_t>(j)];
-    if (i != kUnassigned) commit(i, j);
-  }
-
-  // 2. The rest: most pairs, then least total distance.
-  Eigen::MatrixXd rest = usable;
-  for (Eigen::Index i = 0; i < n_obj; ++i) {
-    if (row_match[static_cast<std::size_t>(i)] != kUnassigned) rest.row(i).setConstant(kNaN);
-  }
-  for (Eigen::Index j = 0; j < n_hyp; ++j) {
-    if (col_taken[static_cast<std::size_t>(j)] != 0) rest.col(j).setConstant(kNaN);
-  }
-  const std::vector<Eigen::Index> assigned = max_matching_min_cost(rest);
-  for (Eigen::Index i = 0; i < n_obj; ++i) {
-    const Eigen::Index j = assigned[static_cast<std::size_t>(i)];
-    if (j != kUnassigned) commit(i, j);
-  }
-
-  // 3. Misses, per-object tracking history; 4. false positives. Don't-care objects and the
-  //    hypotheses matched to them are not counted.
+  // Don't-care objects and the hypotheses matched to them are not counted.
   std::int64_t counted_objects = 0;
   std::int64_t counted_hypotheses = 0;
   for (Eigen::Index i = 0; i < n_obj; ++i) {
     if (ignored_object(i)) continue;
     ++counted_objects;
-    ObjectState& s = *state[static_cast<std::size_t>(i)];
+    ObjectState& s = objects_[object_ids[static_cast<std::size_t>(i)]];
     ++s.frames_present;
     if (row_match[static_cast<std::size_t>(i)] != kUnassigned) {
       ++s.frames_tracked;
@@ -291,6 +218,114 @@ std::vector<MotPair> MotAccumulator::update(std::span<const std::int64_t> object
   }
   counts_.gt_presences += counted_objects;
   counts_.hypothesis_presences += counted_hypotheses;
+}
+
+std::vector<Eigen::Index> MotAccumulator::keepers(std::span<const std::int64_t> hypothesis_ids,
+                                                  const std::vector<ObjectState*>& state,
+                                                  const Eigen::MatrixXd& usable) const {
+  const auto n_hyp = static_cast<Eigen::Index>(hypothesis_ids.size());
+  const auto n_obj = static_cast<Eigen::Index>(state.size());
+  std::unordered_map<std::int64_t, Eigen::Index> col_of_hypothesis;
+  for (Eigen::Index j = 0; j < n_hyp; ++j) {
+    col_of_hypothesis.emplace(hypothesis_ids[static_cast<std::size_t>(j)], j);
+  }
+  // An object stays with the hypothesis it was last matched to when both are present and
+  // pairable. When several objects claim one hypothesis, the most recent match wins (at most one
+  // object was matched to it in any given frame, so there is no tie).
+  std::vector<Eigen::Index> keeper(static_cast<std::size_t>(n_hyp), kUnassigned);
+  for (Eigen::Index i = 0; i < n_obj; ++i) {
+    const ObjectState& s = *state[static_cast<std::size_t>(i)];
+    if (!s.last_hypothesis) continue;
+    const auto it = col_of_hypothesis.find(*s.last_hypothesis);
+    if (it == col_of_hypothesis.end() || std::isnan(usable(i, it->second))) continue;
+    Eigen::Index& k = keeper[static_cast<std::size_t>(it->second)];
+    if (k == kUnassigned ||
+        state[static_cast<std::size_t>(k)]->last_match_frame < s.last_match_frame) {
+      k = i;
+    }
+  }
+  return keeper;
+}
+
+std::vector<MotPair> MotAccumulator::update(std::span<const std::int64_t> object_ids,
+                                            std::span<const std::int64_t> hypothesis_ids,
+                                            const Eigen::MatrixXd& distances,
+                                            std::span<const std::uint8_t> dont_care) {
+  check_frame(object_ids, hypothesis_ids, distances, dont_care);
+  const std::int64_t frame = counts_.frames;
+  const auto n_obj = static_cast<Eigen::Index>(object_ids.size());
+  const auto n_hyp = static_cast<Eigen::Index>(hypothesis_ids.size());
+  const auto ignored_object = [&](Eigen::Index i) {
+    return !dont_care.empty() && dont_care[static_cast<std::size_t>(i)] != 0;
+  };
+
+  // Pairable entries, with NaN for the rest.
+  Eigen::MatrixXd usable(n_obj, n_hyp);
+  for (Eigen::Index i = 0; i < n_obj; ++i) {
+    for (Eigen::Index j = 0; j < n_hyp; ++j) {
+      const double d = distances(i, j);
+      usable(i, j) = pairable(d) ? d : kNaN;
+    }
+  }
+
+  std::vector<Eigen::Index> row_match(static_cast<std::size_t>(n_obj), kUnassigned);
+  std::vector<char> col_taken(static_cast<std::size_t>(n_hyp), 0);
+  std::vector<char> col_ignored(static_cast<std::size_t>(n_hyp), 0);  // matched to don't-care
+  std::vector<MotPair> counted;
+  std::vector<ObjectState*> state(static_cast<std::size_t>(n_obj));
+  for (Eigen::Index i = 0; i < n_obj; ++i) {
+    state[static_cast<std::size_t>(i)] = &objects_[object_ids[static_cast<std::size_t>(i)]];
+  }
+
+  const auto commit = [&](Eigen::Index i, Eigen::Index j) {
+    const std::int64_t o = object_ids[static_cast<std::size_t>(i)];
+    const std::int64_t h = hypothesis_ids[static_cast<std::size_t>(j)];
+    ObjectState& s = *state[static_cast<std::size_t>(i)];
+    const bool is_switch = s.last_hypothesis.has_value() && *s.last_hypothesis != h;
+    const double d = usable(i, j);
+    if (ignored_object(i)) {
+      col_ignored[static_cast<std::size_t>(j)] = 1;
+      record(MotEventType::kIgnored, o, h, d);
+    } else if (is_switch) {
+      ++counts_.switches;
+      record(MotEventType::kSwitch, o, h, d);
+    } else {
+      ++counts_.matches;
+      record(MotEventType::kMatch, o, h, d);
+    }
+    if (!ignored_object(i)) {
+      counts_.distance_sum += d;
+      counted.push_back({i, j});
+    }
+    s.last_hypothesis = h;
+    s.last_match_frame = frame;
+    row_match[static_cast<std::size_t>(i)] = j;
+    col_taken[static_cast<std::size_t>(j)] = 1;
+  };
+
+  // 1. Keep correspondences (keepers); 2. the rest.
+  const std::vector<Eigen::Index> keeper = keepers(hypothesis_ids, state, usable);
+  for (Eigen::Index j = 0; j < n_hyp; ++j) {
+    const Eigen::Index i = keeper[static_cast<std::size_t>(j)];
+    if (i != kUnassigned) commit(i, j);
+  }
+
+  // 2. The rest: most pairs, then least total distance.
+  Eigen::MatrixXd rest = usable;
+  for (Eigen::Index i = 0; i < n_obj; ++i) {
+    if (row_match[static_cast<std::size_t>(i)] != kUnassigned) rest.row(i).setConstant(kNaN);
+  }
+  for (Eigen::Index j = 0; j < n_hyp; ++j) {
+    if (col_taken[static_cast<std::size_t>(j)] != 0) rest.col(j).setConstant(kNaN);
+  }
+  const std::vector<Eigen::Index> assigned = max_matching_min_cost(rest);
+  for (Eigen::Index i = 0; i < n_obj; ++i) {
+    const Eigen::Index j = assigned[static_cast<std::size_t>(i)];
+    if (j != kUnassigned) commit(i, j);
+  }
+
+  // 3. Misses, per-object tracking history; 4. false positives.
+  count_unmatched(object_ids, hypothesis_ids, usable, dont_care, row_match, col_taken, col_ignored);
   ++counts_.frames;
   return counted;
 }

@@ -148,6 +148,24 @@ class MotAccumulator {
 
   void record(MotEventType type, std::int64_t object_id, std::int64_t hypothesis_id,
               double distance);
+  // For each hypothesis column, the object row that keeps it (the object was last matched to it
+  // and the pair is still usable; several: the most recent match), or kUnassigned.
+  [[nodiscard]] std::vector<Eigen::Index> keepers(std::span<const std::int64_t> hypothesis_ids,
+                                                  const std::vector<ObjectState*>& state,
+                                                  const Eigen::MatrixXd& usable) const;
+  // Throws core::InputError for a frame whose sizes disagree, whose ids repeat or whose
+  // distances are negative.
+  void check_frame(std::span<const std::int64_t> object_ids,
+                   std::span<const std::int64_t> hypothesis_ids, const Eigen::MatrixXd& distances,
+                   std::span<const std::uint8_t> dont_care) const;
+  // Misses, per-object tracking history, false positives and the id metrics' overlaps of the
+  // frame being updated, after its matching (row_match: the column of each object's match;
+  // col_taken / col_ignored: columns matched / matched to a don't-care object).
+  void count_unmatched(std::span<const std::int64_t> object_ids,
+                       std::span<const std::int64_t> hypothesis_ids, const Eigen::MatrixXd& usable,
+                       std::span<const std::uint8_t> dont_care,
+                       const std::vector<Eigen::Index>& row_match,
+                       const std::vector<char>& col_taken, const std::vector<char>& col_ignored);
 
   MotOptions options_;
   MotSummary counts_;  // frame-level counts; per-object and id metrics are derived in summary()
