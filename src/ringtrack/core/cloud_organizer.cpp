@@ -83,6 +83,62 @@ bool is_return(const Eigen::Vector3f& p) {
   return p.x() != 0.0f || p.y() != 0.0f || p.z() != 0.0f;
 }
 
+// f applied to each value.
+template <typename F>
+std::vector<double> each(const std::vector<double>& values, F f) {
+  std::vector<double> out(values.size());
+  std::transform(values.begin(), values.end(), out.begin(), f);
+  return out;
+}
+
+// A point into its cell: out of range marks an empty cell too close or too far; a cell hit
+// twice keeps the nearer point (both counted).
+void place_return(OrganizedScan& scan, CloudOrganizeStats& stats, int ring, int column,
+                  double range, double min_range, double max_range, float intensity,
+                  const Eigen::Vector3f& p) {
+  const std::size_t cell = scan.index(ring, column);
+  if (range < min_range || range > max_range) {
+    ++stats.out_of_range;
+    if (!scan.valid(cell)) {
+      scan.set_invalid(ring, column,
+                       range < min_range ? ReturnStatus::kTooClose : ReturnStatus::kTooFar);
+    }
+    return;
+  }
+  if (scan.valid(cell)) {
+    ++stats.collided;
+    if (static_cast<float>(range) >= scan.range_m(cell)) return;
+  }
+  scan.set_return(ring, column, static_cast<float>(range),
+                  std::isfinite(intensity) ? intensity : 0.0f, p);
+}
+
+// Intensities and times, when given, must be one per point.
+void check_sizes(const UnorganizedCloud& cloud) {
+  const std::size_t n = cloud.size();
+  if (!cloud.intensity.empty() && cloud.intensity.size() != n) {
+    throw InputError("cloud organizer: " + std::to_string(cloud.intensity.size()) +
+                     " intensities for " + std::to_string(n) + " points");
+  }
+  if (!cloud.time_ns.empty() && cloud.time_ns.size() != n) {
+    throw InputError("cloud organizer: " + std::to_string(cloud.time_ns.size()) + " times for " +
+                     std::to_string(n) + " points");
+  }
+}
+
+// Median, 95th percentile and largest of the kept points' elevation residuals (reorders them).
+void summarise_residuals(std::vector<float>& residual_deg, CloudOrganizeStats& stats) {
+  if (residual_deg.empty()) return;
+  const auto mid = residual_deg.begin() + static_cast<std::ptrdiff_t>(residual_deg.size() / 2);
+  std::nth_element(residual_deg.begin(), mid, residual_deg.end());
+  stats.median_elevation_error_deg = *mid;
+  const auto p95 = residual_deg.begin() +
+                   static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(residual_deg.size() - 1));
+  std::nth_element(residual_deg.begin(), p95, residual_deg.end());
+  stats.p95_elevation_error_deg = *p95;
+  stats.max_elevation_error_deg = *std::max_element(residual_deg.begin(), residual_deg.end());
+}
+
 }  // namespace
 
 void CloudOrganizeTotals::add(const CloudOrganizeStats& s) {
@@ -194,16 +250,35 @@ bool CloudOrganizer::offsets_fit_better(const UnorganizedCloud& cloud) const {
   return with <= without;
 }
 
+void CloudOrganizer::set_columns(OrganizedScan& scan, const std::vector<std::int64_t>& first_ns,
+                                 std::int64_t stamp_ns) const {
+  constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
+  const bool timed = !first_ns.empty();
+  const double first = options_.first_column_azimuth_rad;
+  const double period_ns = 1e9 / (model_.scan_rate_hz * columns_);
+  int anchor = -1;
+  for (int c = 0; c < columns_; ++c) {
+    const auto u = static_cast<std::size_t>(c);
+    scan.column_azimuth_rad[u] = wrap_two_pi(first + (options_.clockwise ? -c : c) * step_rad_);
+    if (timed && anchor < 0 && first_ns[u] != kUnset) anchor = c;
+  }
+  for (int c = 0; c < columns_; ++c) {
+    const auto u = static_cast<std::size_t>(c);
+    if (timed && first_ns[u] != kUnset) {
+      anchor = c;
+      scan.column_stamp_ns[u] = first_ns[u];
+    } else if (anchor < 0) {
+      scan.column_stamp_ns[u] = stamp_ns + std::llround(c * period_ns);
+    } else {
+      scan.column_stamp_ns[u] =
+          first_ns[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns);
+    }
+  }
+}
+
 OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
+  check_sizes(cloud);
   const std::size_t n = cloud.size();
-  if (!cloud.intensity.empty() && cloud.intensity.size() != n) {
-    throw InputError("cloud organizer: " + std::to_string(cloud.intensity.size()) +
-                     " intensities for " + std::to_string(n) + " points");
-  }
-  if (!cloud.time_ns.empty() && cloud.time_ns.size() != n) {
-    throw InputError("cloud organizer: " + std::to_string(cloud.time_ns.size()) + " times for " +
-                     std::to_string(n) + " points");
-  }
   const int rings = model_.rings();
   const auto& el = model_.elevation_rad;
   bool offsets = has_offsets_;
@@ -212,12 +287,8 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
   }
   const std::vector<double> no_offsets(offsets ? 0 : el.size(), 0.0);
   const auto& voff = offsets ? model_.vertical_offset_m : no_offsets;
-  std::vector<double> cos_el(el.size());
-  std::vector<double> sin_el(el.size());
-  for (std::size_t r = 0; r < el.size(); ++r) {
-    cos_el[r] = std::cos(el[r]);
-    sin_el[r] = std::sin(el[r]);
-  }
+  const std::vector<double> cos_el = each(el, [](double e) { return std::cos(e); });
+  const std::vector<double> sin_el = each(el, [](double e) { return std::sin(e); });
   OrganizedCloud out;
   out.scan = OrganizedScan(rings, columns_);
   OrganizedScan& scan = out.scan;
@@ -272,57 +343,12 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
       auto& t = first_ns[static_cast<std::size_t>(column)];
       t = std::min(t, cloud.time_ns[i]);
     }
-    const std::size_t cell = scan.index(ring, column);
-    if (range < min_range || range > max_range) {
-      ++stats.out_of_range;
-      if (!scan.valid(cell)) {
-        scan.set_invalid(ring, column,
-                         range < min_range ? ReturnStatus::kTooClose : ReturnStatus::kTooFar);
-      }
-      continue;
-    }
-    if (scan.valid(cell)) {
-      ++stats.collided;
-      if (static_cast<float>(range) >= scan.range_m(cell)) continue;
-    }
     const float intensity = cloud.intensity.empty() ? 0.0f : cloud.intensity[i];
-    scan.set_return(ring, column, static_cast<float>(range),
-                    std::isfinite(intensity) ? intensity : 0.0f, p);
+    place_return(scan, stats, ring, column, range, min_range, max_range, intensity, p);
   }
   stats.organized = scan.valid_count();
-  if (!residual_deg.empty()) {
-    const auto mid = residual_deg.begin() + static_cast<std::ptrdiff_t>(residual_deg.size() / 2);
-    std::nth_element(residual_deg.begin(), mid, residual_deg.end());
-    stats.median_elevation_error_deg = *mid;
-    const auto p95 =
-        residual_deg.begin() +
-        static_cast<std::ptrdiff_t>(0.95 * static_cast<double>(residual_deg.size() - 1));
-    std::nth_element(residual_deg.begin(), p95, residual_deg.end());
-    stats.p95_elevation_error_deg = *p95;
-    stats.max_elevation_error_deg = *std::max_element(residual_deg.begin(), residual_deg.end());
-  }
-
-  // Column azimuths on the grid; stamps from the points' times where a column has some,
-  // continued at the nominal column period from the nearest timed column before (or after).
-  const double period_ns = 1e9 / (model_.scan_rate_hz * columns_);
-  int anchor = -1;
-  for (int c = 0; c < columns_; ++c) {
-    const auto u = static_cast<std::size_t>(c);
-    scan.column_azimuth_rad[u] = wrap_two_pi(first + (clockwise ? -c : c) * step_rad_);
-    if (timed && anchor < 0 && first_ns[u] != kUnset) anchor = c;
-  }
-  for (int c = 0; c < columns_; ++c) {
-    const auto u = static_cast<std::size_t>(c);
-    if (timed && first_ns[u] != kUnset) {
-      anchor = c;
-      scan.column_stamp_ns[u] = first_ns[u];
-    } else if (anchor < 0) {
-      scan.column_stamp_ns[u] = cloud.stamp_ns + std::llround(c * period_ns);
-    } else {
-      scan.column_stamp_ns[u] =
-          first_ns[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns);
-    }
-  }
+  summarise_residuals(residual_deg, stats);
+  set_columns(scan, first_ns, cloud.stamp_ns);
   scan.stamp_ns = timed ? scan.column_stamp_ns[0] : cloud.stamp_ns;
   return out;
 }

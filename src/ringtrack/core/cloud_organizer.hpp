@@ -120,6 +120,11 @@ class CloudOrganizer {
 
   // Whether the cloud's points fit the model's beam offsets better than beams from the origin.
   [[nodiscard]] bool offsets_fit_better(const UnorganizedCloud& cloud) const;
+  // Column azimuths on the grid; stamps from the points' earliest times where a column has some
+  // (first_ns, empty without times), continued at the nominal column period from the nearest
+  // timed column before (or after), else from stamp_ns.
+  void set_columns(OrganizedScan& scan, const std::vector<std::int64_t>& first_ns,
+                   std::int64_t stamp_ns) const;
 };
 
 /// The valid cells of an organized scan as an unorganized cloud, ring by ring (each point's time
