@@ -92,8 +92,7 @@ std::string decompress_lz4(std::span<const std::uint8_t> in, std::uint32_t decla
     }
     std::size_t in_size = in.size() - in_at;
     std::size_t out_size = out.size() - out_at;
-    rc = LZ4F_decompress(ctx, out.data() + out_at, &out_size, in.data() + in_at, &in_size,
-                         nullptr);
+    rc = LZ4F_decompress(ctx, out.data() + out_at, &out_size, in.data() + in_at, &in_size, nullptr);
     if (LZ4F_isError(rc)) {
       error = LZ4F_getErrorName(rc);
       break;
@@ -215,6 +214,29 @@ Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
   file_size_ = fs::file_size(path, ec);
   file_.reset(std::fopen(name.c_str(), "rb"));
   if (!file_ || ec) throw core::InputError(name + ": cannot open for reading");
+  check_magic();
+  offset_ = kMagic.size();
+  Record header;
+  if (!read_record(header) || header.op != static_cast<std::uint8_t>(Rosbag1Op::kBagHeader)) {
+    throw core::InputError(name + ": expected the bag header record at offset " +
+                           std::to_string(kMagic.size()));
+  }
+  index_pos_ = header.fields->u64("index_pos");
+  const std::uint32_t conn_count = header.fields->u32("conn_count");
+  const std::uint32_t chunk_count = header.fields->u32("chunk_count");
+  first_record_ = offset_;
+  indexed_ = index_pos_ != 0;
+  if (indexed_) {
+    read_index(conn_count, chunk_count);
+  } else {
+    scan_for_connections();
+  }
+  collect_topics();
+  offset_ = first_record_;
+}
+
+void Rosbag1Reader::check_magic() {
+  const std::string name = path_.string();
   std::vector<std::uint8_t> magic;
   if (file_size_ < kMagic.size()) {
     throw core::InputError(name + ": not a ROS 1 bag (shorter than the '#ROSBAG V2.0' line)");
@@ -229,57 +251,49 @@ Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
     }
     throw core::InputError(name + ": not a ROS 1 bag (expected '#ROSBAG V2.0' at offset 0)");
   }
-  offset_ = kMagic.size();
-  Record header;
-  if (!read_record(header) || header.op != static_cast<std::uint8_t>(Rosbag1Op::kBagHeader)) {
-    throw core::InputError(name + ": expected the bag header record at offset " +
-                           std::to_string(kMagic.size()));
+}
+
+void Rosbag1Reader::read_index(std::uint32_t conn_count, std::uint32_t chunk_count) {
+  const std::string name = path_.string();
+  if (index_pos_ < first_record_ || index_pos_ > file_size_) {
+    throw core::InputError(name + ": bag header: index_pos " + std::to_string(index_pos_) +
+                           " lies outside the file (" + std::to_string(file_size_) + " bytes)");
   }
-  index_pos_ = header.fields->u64("index_pos");
-  const std::uint32_t conn_count = header.fields->u32("conn_count");
-  const std::uint32_t chunk_count = header.fields->u32("chunk_count");
-  first_record_ = offset_;
-  indexed_ = index_pos_ != 0;
-  if (indexed_) {
-    if (index_pos_ < first_record_ || index_pos_ > file_size_) {
-      throw core::InputError(name + ": bag header: index_pos " + std::to_string(index_pos_) +
-                             " lies outside the file (" + std::to_string(file_size_) + " bytes)");
-    }
-    // The index section: every connection record, then one chunk info record per chunk.
-    offset_ = index_pos_;
-    Record r;
-    std::vector<std::uint8_t> data;
-    std::uint32_t chunk_infos = 0;
-    while (read_record(r)) {
-      if (r.op == static_cast<std::uint8_t>(Rosbag1Op::kConnection)) {
-        read_bytes(r.data_offset, r.data_bytes, data);
-        add_connection(r, data);
-      } else if (r.op == static_cast<std::uint8_t>(Rosbag1Op::kChunkInfo)) {
-        ++chunk_infos;
-        read_bytes(r.data_offset, r.data_bytes, data);
-        const std::uint32_t count = r.fields->u32("count");
-        if (data.size() != 8ull * count) {
-          throw core::InputError(
-              name + ": chunk info record at offset " + std::to_string(r.offset) + " holds " +
-              std::to_string(data.size()) + " bytes, expected " + std::to_string(8ull * count));
-        }
-        for (std::uint32_t i = 0; i < count; ++i) {
-          const auto it = connections_.find(le32(data.data() + 8 * i));
-          if (it != connections_.end()) it->second.messages += le32(data.data() + 8 * i + 4);
-        }
-      } else {
-        ++stats_.unknown_records;
+  // The index section: every connection record, then one chunk info record per chunk.
+  offset_ = index_pos_;
+  Record r;
+  std::vector<std::uint8_t> data;
+  std::uint32_t chunk_infos = 0;
+  while (read_record(r)) {
+    if (r.op == static_cast<std::uint8_t>(Rosbag1Op::kConnection)) {
+      read_bytes(r.data_offset, r.data_bytes, data);
+      add_connection(r, data);
+    } else if (r.op == static_cast<std::uint8_t>(Rosbag1Op::kChunkInfo)) {
+      ++chunk_infos;
+      read_bytes(r.data_offset, r.data_bytes, data);
+      const std::uint32_t count = r.fields->u32("count");
+      if (data.size() != 8ull * count) {
+        throw core::InputError(name + ": chunk info record at offset " + std::to_string(r.offset) +
+                               " holds " + std::to_string(data.size()) + " bytes, expected " +
+                               std::to_string(8ull * count));
       }
+      for (std::uint32_t i = 0; i < count; ++i) {
+        const auto it = connections_.find(le32(data.data() + 8 * i));
+        if (it != connections_.end()) it->second.messages += le32(data.data() + 8 * i + 4);
+      }
+    } else {
+      ++stats_.unknown_records;
     }
-    if (connections_.size() != conn_count || chunk_infos != chunk_count) {
-      throw core::InputError(name + ": the index lists " + std::to_string(connections_.size()) +
-                             " connections and " + std::to_string(chunk_infos) +
-                             " chunks, the bag header says " + std::to_string(conn_count) +
-                             " and " + std::to_string(chunk_count) + " (truncated or corrupt)");
-    }
-  } else {
-    scan_for_connections();
   }
+  if (connections_.size() != conn_count || chunk_infos != chunk_count) {
+    throw core::InputError(name + ": the index lists " + std::to_string(connections_.size()) +
+                           " connections and " + std::to_string(chunk_infos) +
+                           " chunks, the bag header says " + std::to_string(conn_count) + " and " +
+                           std::to_string(chunk_count) + " (truncated or corrupt)");
+  }
+}
+
+void Rosbag1Reader::collect_topics() {
   for (const auto& entry : connections_) {
     const auto& c = entry.second;  // a plain reference: clang 14 cannot capture structured bindings
     auto it = std::find_if(topics_.begin(), topics_.end(),
@@ -288,12 +302,11 @@ Rosbag1Reader::Rosbag1Reader(const fs::path& path) : path_(path) {
       topics_.push_back({c.topic, c.type, 0});
       it = topics_.end() - 1;
     } else if (it->type != c.type) {
-      throw core::InputError(name + ": topic " + c.topic + " has connections of types " + it->type +
-                             " and " + c.type);
+      throw core::InputError(path_.string() + ": topic " + c.topic + " has connections of types " +
+                             it->type + " and " + c.type);
     }
     it->messages += c.messages;
   }
-  offset_ = first_record_;
 }
 
 Rosbag1Reader::~Rosbag1Reader() = default;
@@ -393,11 +406,11 @@ void Rosbag1Reader::load_chunk(const Record& record) {
     const std::string error = compression == "bz2" ? decompress_bz2(raw_, size, chunk_)
                                                    : decompress_lz4(raw_, size, chunk_);
     if (!error.empty() || chunk_.size() != size) {
-      throw core::InputError(where + ": corrupt " + compression + " data (" +
-                             (error.empty() ? std::to_string(chunk_.size()) + " of " +
-                                                  std::to_string(size) + " bytes"
-                                            : error) +
-                             ")");
+      throw core::InputError(
+          where + ": corrupt " + compression + " data (" +
+          (error.empty() ? std::to_string(chunk_.size()) + " of " + std::to_string(size) + " bytes"
+                         : error) +
+          ")");
     }
   } else {
     throw core::InputError(where + ": compression '" + compression +

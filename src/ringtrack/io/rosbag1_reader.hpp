@@ -83,6 +83,13 @@ class Rosbag1Reader final : public RosbagReader {
   void load_chunk(const Record& record);
   void add_connection(const Record& record, std::span<const std::uint8_t> data);
   void scan_for_connections();
+  // Checks the '#ROSBAG V2.0' line (another version is named in the error).
+  void check_magic();
+  // Reads the index section at index_pos_ (connections, chunk infos) and checks its counts
+  // against the bag header's.
+  void read_index(std::uint32_t conn_count, std::uint32_t chunk_count);
+  // One topic per connection name, with its type and message count.
+  void collect_topics();
   bool next_in_chunk(RosbagMessage& out);
 
   std::filesystem::path path_;
