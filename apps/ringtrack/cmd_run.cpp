@@ -430,13 +430,6 @@ std::unique_ptr<io::FoxgloveSink> open_mcap(const RunOptions& o, const core::Con
 
 // The maps' header line on their frame: float32 cannot hold UTM-scale coordinates to the
 // centimetre, so the maps stay in the pipeline's local frame and say where it lies.
-std::string origin_comment(const Eigen::Vector3d& origin) {
-  char line[160];
-  std::snprintf(line, sizeof line, "origin_m %.3f %.3f %.3f (world = point + origin)", origin.x(),
-                origin.y(), origin.z());
-  return line;
-}
-
 // Writes a voxel map's points as binary PLY (x y z intensity), and as PCD beside it when
 // with_pcd, in the local frame with origin (origin_comment), after the voxels spilled while the
 // run went on (mapping.map_radius_m; then the PCD is binary, streamed, not compressed);
@@ -452,7 +445,7 @@ std::size_t write_map(const fs::path& path, const mapping::StaticMap& map, bool 
     xyz.push_back(p.position);
     intensity.push_back(p.intensity);
   }
-  const std::string comment = origin_comment(origin);
+  const std::string comment = io::origin_comment(origin);
   if (spill != nullptr && spill->size() > 0) {
     const auto spilled = spill->size();
     spill->write(path, with_pcd ? fs::path(path).replace_extension(".pcd") : fs::path(), xyz,

@@ -250,21 +250,19 @@ bool CloudOrganizer::offsets_fit_better(const UnorganizedCloud& cloud) const {
   return with <= without;
 }
 
-void CloudOrganizer::set_columns(OrganizedScan& scan, const std::vector<std::int64_t>& first_ns,
-                                 std::int64_t stamp_ns) const {
-  constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
-  const bool timed = !first_ns.empty();
-  const double first = options_.first_column_azimuth_rad;
-  const double period_ns = 1e9 / (model_.scan_rate_hz * columns_);
-  int anchor = -1;
-  for (int c = 0; c < columns_; ++c) {
-    const auto u = static_cast<std::size_t>(c);
-    scan.column_azimuth_rad[u] = wrap_two_pi(first + (options_.clockwise ? -c : c) * step_rad_);
-    if (timed && anchor < 0 && first_ns[u] != kUnset) anchor = c;
+void stamp_columns(OrganizedScan& scan, const std::vector<std::int64_t>& first_ns,
+                   std::int64_t stamp_ns, double period_ns) {
+  const int columns = scan.columns();
+  const auto timed = [&](int c) {
+    return !first_ns.empty() && first_ns[static_cast<std::size_t>(c)] != kNoColumnTime;
+  };
+  int anchor = -1;  // the last timed column, or the first one for the columns before it
+  for (int c = 0; c < columns && anchor < 0; ++c) {
+    if (timed(c)) anchor = c;
   }
-  for (int c = 0; c < columns_; ++c) {
+  for (int c = 0; c < columns; ++c) {
     const auto u = static_cast<std::size_t>(c);
-    if (timed && first_ns[u] != kUnset) {
+    if (timed(c)) {
       anchor = c;
       scan.column_stamp_ns[u] = first_ns[u];
     } else if (anchor < 0) {
@@ -274,6 +272,16 @@ void CloudOrganizer::set_columns(OrganizedScan& scan, const std::vector<std::int
           first_ns[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns);
     }
   }
+}
+
+void CloudOrganizer::set_columns(OrganizedScan& scan, const std::vector<std::int64_t>& first_ns,
+                                 std::int64_t stamp_ns) const {
+  const double first = options_.first_column_azimuth_rad;
+  for (int c = 0; c < columns_; ++c) {
+    scan.column_azimuth_rad[static_cast<std::size_t>(c)] =
+        wrap_two_pi(first + (options_.clockwise ? -c : c) * step_rad_);
+  }
+  stamp_columns(scan, first_ns, stamp_ns, 1e9 / (model_.scan_rate_hz * columns_));
 }
 
 OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
@@ -296,8 +304,7 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
   stats.points = n;
   stats.beam_offsets = offsets;
   const bool timed = !cloud.time_ns.empty();
-  constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
-  std::vector<std::int64_t> first_ns(timed ? static_cast<std::size_t>(columns_) : 0, kUnset);
+  std::vector<std::int64_t> first_ns(timed ? static_cast<std::size_t>(columns_) : 0, kNoColumnTime);
   std::vector<float> residual_deg;
   residual_deg.reserve(n);
   const double min_range = model_.min_range_m;

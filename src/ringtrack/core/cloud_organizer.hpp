@@ -5,6 +5,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -120,12 +121,22 @@ class CloudOrganizer {
 
   // Whether the cloud's points fit the model's beam offsets better than beams from the origin.
   [[nodiscard]] bool offsets_fit_better(const UnorganizedCloud& cloud) const;
-  // Column azimuths on the grid; stamps from the points' earliest times where a column has some
-  // (first_ns, empty without times), continued at the nominal column period from the nearest
-  // timed column before (or after), else from stamp_ns.
+  // Column azimuths on the grid; stamps as stamp_columns gives them at the nominal column
+  // period.
   void set_columns(OrganizedScan& scan, const std::vector<std::int64_t>& first_ns,
                    std::int64_t stamp_ns) const;
 };
+
+/// Marks a column without a point time in stamp_columns' first_ns.
+inline constexpr std::int64_t kNoColumnTime = std::numeric_limits<std::int64_t>::max();
+
+/// Column stamps of a scan organized from points: a column's earliest point time where it has
+/// one (first_ns[c], kNoColumnTime for none; first_ns empty when the points carry no times),
+/// else continued at period_ns from the nearest timed column before it (after it, for the
+/// columns before the first timed one), else stamp_ns + c * period_ns. Shared by
+/// CloudOrganizer and io::PointCloud2Organizer.
+void stamp_columns(OrganizedScan& scan, const std::vector<std::int64_t>& first_ns,
+                   std::int64_t stamp_ns, double period_ns);
 
 /// The valid cells of an organized scan as an unorganized cloud, ring by ring (each point's time
 /// its column's stamp): what drivers without a ring field publish.

@@ -8,6 +8,7 @@
 #include <unordered_set>
 
 #include "ringtrack/io/foxglove_proto.hpp"
+#include "ringtrack/io/text.hpp"
 
 namespace ringtrack::io {
 namespace {
@@ -96,12 +97,7 @@ void FoxgloveSink::write_pipeline_frame(const core::OrganizedScan& scan,
                                         const core::Pose& world_pose,
                                         const pipeline::FrameResult& result,
                                         const mapping::StaticMap& map) {
-  if (stats_.scans == 0) {
-    char origin[160];
-    std::snprintf(origin, sizeof origin, "origin_m %.3f %.3f %.3f (world = point + origin)",
-                  result.origin.x(), result.origin.y(), result.origin.z());
-    write_metadata("frame", {{"origin_m", origin}});
-  }
+  if (stats_.scans == 0) write_metadata("frame", {{"origin_m", origin_comment(result.origin)}});
   core::Pose local = world_pose;
   local.translation -= result.origin;
   write_frame(scan, local, result, map);

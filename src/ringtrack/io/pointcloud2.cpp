@@ -195,7 +195,7 @@ class RingGrid {
         period_ns_(1e9 / (options.scan_rate_hz * columns_)),
         scan_(model.rings(), columns_),
         has_azimuth_(static_cast<std::size_t>(columns_), 0),
-        first_ns_(static_cast<std::size_t>(columns_), kUnset),
+        first_ns_(static_cast<std::size_t>(columns_), core::kNoColumnTime),
         min_range_(static_cast<float>(model.min_range_m)),
         max_range_(static_cast<float>(model.max_range_m)) {}
 
@@ -239,33 +239,19 @@ class RingGrid {
   // The scan. Columns without points: nominal azimuths; stamps continued from the nearest timed
   // column at the nominal column period (or from the cloud's stamp without times).
   core::OrganizedScan finish(std::int64_t cloud_stamp_ns) {
-    int anchor = -1;  // the last column with a time, or the first one for the columns before it
     for (int c = 0; c < columns_; ++c) {
       const auto u = static_cast<std::size_t>(c);
       if (has_azimuth_[u] == 0) {
         scan_.column_azimuth_rad[u] =
             velodyne_to_ringtrack_azimuth_rad(options_.cut_azimuth_deg + (c + 0.5) * step_deg_);
       }
-      if (first_ns_[u] != kUnset && anchor < 0) anchor = c;
     }
-    for (int c = 0; c < columns_; ++c) {
-      const auto u = static_cast<std::size_t>(c);
-      if (first_ns_[u] != kUnset) {
-        anchor = c;
-        scan_.column_stamp_ns[u] = first_ns_[u];
-      } else if (anchor < 0) {
-        scan_.column_stamp_ns[u] = cloud_stamp_ns + std::llround(c * period_ns_);
-      } else {
-        scan_.column_stamp_ns[u] =
-            first_ns_[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns_);
-      }
-    }
+    core::stamp_columns(scan_, first_ns_, cloud_stamp_ns, period_ns_);
     scan_.stamp_ns = scan_.column_stamp_ns[0];
     return std::move(scan_);
   }
 
  private:
-  static constexpr auto kUnset = std::numeric_limits<std::int64_t>::max();
   const core::SensorModel& model_;
   const PointCloud2Options& options_;
   PointCloud2Stats& stats_;

@@ -3,6 +3,7 @@
 #include <cerrno>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
@@ -187,6 +188,13 @@ std::vector<std::int64_t> read_stamps(const std::filesystem::path& path, bool re
     stamps.push_back(*ns);
   }
   return stamps;
+}
+
+std::string origin_comment(const Eigen::Vector3d& origin) {
+  char line[160];
+  std::snprintf(line, sizeof line, "origin_m %.3f %.3f %.3f (world = point + origin)", origin.x(),
+                origin.y(), origin.z());
+  return line;
 }
 
 }  // namespace ringtrack::io

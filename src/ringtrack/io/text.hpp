@@ -1,6 +1,7 @@
 #pragma once
 /// Small, locale-independent text helpers shared by the io readers and writers.
 
+#include <Eigen/Core>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
@@ -33,6 +34,9 @@ std::vector<std::string> read_lines(const std::filesystem::path& path);
 /// naming file:line otherwise.
 std::vector<std::int64_t> read_stamps(const std::filesystem::path& path,
                                       bool require_increasing = true);
+/// "origin_m X Y Z (world = point + origin)", metres to the millimetre: how outputs written in the
+/// pipeline's local frame (maps, MCAP) state where that frame lies in the world of the poses.
+std::string origin_comment(const Eigen::Vector3d& origin);
 /// Reads a whole binary file; throws core::InputError naming the file when it cannot be read.
 std::vector<std::uint8_t> read_file_bytes(const std::filesystem::path& path);
 
