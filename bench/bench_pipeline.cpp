@@ -2,6 +2,7 @@
 // open field, in time order with the tracker warmed up (the steady state of a long run).
 // BM_PipelineScanMovingPark: the same on the park (trees, bushes, people) seen from the
 // benchmark's moving sensor (figure 8, deskewed): the cluttered moving case of the map stage.
+// Its second argument turns the recent views' column test (background.moving_column_m) off.
 
 #include <benchmark/benchmark.h>
 
@@ -114,6 +115,8 @@ void BM_PipelineScanLongRun(benchmark::State& state) {
 void BM_PipelineScanMovingPark(benchmark::State& state) {
   core::Config config;
   config.mapping.free_space_moving = state.range(0) != 0;
+  // The recent views' column test (background.moving_column_m) on or off, side by side.
+  if (state.range(1) == 0) config.background.moving_column_m = 0.0;
   run_pipeline(state, moving_park_scans(), config);
 }
 
@@ -131,9 +134,10 @@ BENCHMARK(BM_PipelineScanLongRun)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);
 BENCHMARK(BM_PipelineScanMovingPark)
-    ->ArgName("free_space_moving")
-    ->Arg(0)
-    ->Arg(1)
+    ->ArgNames({"free_space_moving", "column"})
+    ->Args({0, 1})
+    ->Args({0, 0})
+    ->Args({1, 1})
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(5)
     ->ReportAggregatesOnly(true);

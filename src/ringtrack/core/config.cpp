@@ -451,6 +451,11 @@ class Schema {
     number("moving_clearance_m", b.moving_clearance_m, 0.0, 10.0,
            "moving_memory: none of the earlier scan's beams through the cube of this half side "
            "around the point may end inside or before it (m)");
+    number("moving_column_m", b.moving_column_m, 0.0, 10.0,
+           "moving_memory: half width of the column under a point (m) whose earlier beams must "
+           "all pass free, from moving_column_ground_m above the ground to the point; 0 = off");
+    number("moving_column_ground_m", b.moving_column_ground_m, 0.0, 10.0,
+           "moving_memory: the column test's column stops this far above the ground (m)");
     build_odometry(c.odometry);
   }
 

@@ -188,6 +188,16 @@ struct BackgroundRangeConfig {
   /// ... and none of its beams through the cube of this half side around the point may end
   /// inside or before the cube (m).
   double moving_clearance_m{0.1};
+  /// Column test (0 = off): an earlier scan also saw through a point when its beams through the
+  /// vertical column of this half width (m) under the point, from moving_column_ground_m above
+  /// the ground up to moving_clearance_m below the point, pass it free, at least one of them and
+  /// none ending inside or before it: a standing body fills the column under its hits, so where
+  /// a far person is hit by one ring and an earlier scan's rings passed a metre higher or lower,
+  /// the ones below still tell (docs/detection.md).
+  double moving_column_m{0.1};
+  /// ... the column stops this far above the ground (m): ground hits inside it would say
+  /// "occupied" everywhere.
+  double moving_column_ground_m{0.2};
 };
 
 /// What ICP minimises per correspondence (docs/odometry.md, "Residual").

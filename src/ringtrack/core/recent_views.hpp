@@ -32,6 +32,8 @@ class RecentViews : public SceneMemory {
            std::shared_ptr<const BeamGeometry> geometry);
   /// Forgets every scan.
   void reset();
+  /// The ground's z in the frame of the poses (the column test stops above it).
+  void set_ground_z(double z_m) { ground_z_m_ = z_m; }
   /// Scans kept (at most four times moving_lag_scans).
   [[nodiscard]] std::size_t scans() const { return count_; }
 
@@ -47,11 +49,16 @@ class RecentViews : public SceneMemory {
     std::optional<VisibilityQuery> query;  // over `scan`, which stays in place
   };
   [[nodiscard]] const View* view_back(int lag) const;
+  [[nodiscard]] bool column_seen_free(const VisibilityQuery& query, const Eigen::Vector3d& point,
+                                      double margin_m) const;
 
   SensorModel model_;
   std::vector<int> lags_;  // scans back, ascending
   double lateral_m_;
   double clearance_m_;
+  double column_m_;
+  double column_ground_m_;
+  double ground_z_m_{0.0};
   std::vector<View> views_;  // ring buffer of the largest lag's size
   std::size_t next_{0};
   std::size_t count_{0};

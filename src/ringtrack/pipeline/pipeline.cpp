@@ -62,6 +62,7 @@ core::Pose Pipeline::to_local(const core::Pose& world) {
     // test follows the data, not the datum of the world frame (sea level, a map's corner).
     ground_z_ = world.translation.z() - origin_.z() - config_.detection.sensor_height_m;
     detector_.set_ground_z(ground_z_);
+    recent_views_.set_ground_z(ground_z_);
     framed_ = true;
   }
   core::Pose local = world;

@@ -296,7 +296,12 @@ Pose flight_pose(int k) {
 
 struct Flight {
   SensorModel model = SensorModel::vlp16();
-  RecentViews views{model};
+  BackgroundRangeConfig config{};
+  RecentViews views{model, config};
+  Flight() = default;
+  explicit Flight(const BackgroundRangeConfig& c) : config(c), views(model, c) {
+    views.set_ground_z(0.0);
+  }
   // Adds scans 0 .. count-1 of the scene to the memory.
   void fly(int count, const Scene& scene) {
     for (int k = 0; k < count; ++k) {
@@ -356,6 +361,49 @@ TEST(RecentViews, TheGroundUnderGrazingBeamsIsNotNew) {
   EXPECT_EQ(fresh, 0);
 }
 
+// The per-point test alone (a lateral tolerance of 0: no earlier beam ever passes exactly through
+// a point) against the column test alone: where the person now stands, the earlier scans' beams
+// passed through the columns under its hits and ended at the wall.
+BackgroundRangeConfig column_only(double half_width_m) {
+  BackgroundRangeConfig c;
+  c.moving_lateral_m = 0.0;
+  c.moving_column_m = half_width_m;
+  return c;
+}
+
+TEST(RecentViews, TheColumnUnderAHitTellsWhereNoEarlierBeamPassedTheHitItself) {
+  const Scene empty{true, std::nullopt, std::nullopt};
+  Scene with_person = empty;
+  with_person.person = kPersonBox;
+  // Hits at least 0.35 m up have a column of 0.05 m or more above moving_column_ground_m (0.2 m).
+  const Eigen::AlignedBox3d upper(Eigen::Vector3d(7.0, 0.3, 0.35), Eigen::Vector3d(7.4, 0.7, 1.8));
+  Flight without(column_only(0.0));
+  without.fly(10, empty);
+  EXPECT_EQ(without.new_points(10, with_person, upper).second, 0);
+  Flight with(column_only(0.1));
+  with.fly(10, empty);
+  const auto [inside, fresh] = with.new_points(10, with_person, upper);
+  ASSERT_GT(inside, 20);
+  EXPECT_GT(fresh * 10, inside * 9) << fresh << " of " << inside;
+}
+
+TEST(RecentViews, AnObjectThatStoodThereAllAlongFillsItsColumns) {
+  // The same box, present in every earlier scan (a parked crate, a bush): the beams under its
+  // hits ended on it, so none of its points is new; nor is a pole's or the ground's.
+  Scene standing{true, Eigen::Vector2d(5.0, -1.0), kPersonBox};
+  Flight f(column_only(0.1));
+  f.fly(21, standing);
+  const auto [inside, fresh] = f.new_points(21, standing, kPersonBox);
+  ASSERT_GT(inside, 20);
+  EXPECT_EQ(fresh, 0);
+  const Eigen::AlignedBox3d pole(Eigen::Vector3d(4.8, -1.2, 0.05), Eigen::Vector3d(5.2, -0.8, 3.0));
+  const auto [pole_inside, pole_fresh] = f.new_points(21, standing, pole);
+  ASSERT_GT(pole_inside, 5);
+  EXPECT_EQ(pole_fresh, 0);
+  const Eigen::AlignedBox3d ground(Eigen::Vector3d(-30, -30, -0.1), Eigen::Vector3d(30, 30, 0.1));
+  EXPECT_EQ(f.new_points(21, standing, ground).second, 0);
+}
+
 TEST(RecentViews, OnlyScansAtTheLagsAnswerAndResetForgets) {
   Flight f;
   const Scene empty{true, std::nullopt, std::nullopt};
@@ -379,6 +427,12 @@ TEST(RecentViews, RejectsOutOfRangeSettings) {
   EXPECT_THROW(RecentViews(SensorModel::vlp16(), c), ConfigError);
   c = {};
   c.moving_clearance_m = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(RecentViews(SensorModel::vlp16(), c), ConfigError);
+  c = {};
+  c.moving_column_m = -0.1;
+  EXPECT_THROW(RecentViews(SensorModel::vlp16(), c), ConfigError);
+  c = {};
+  c.moving_column_ground_m = std::numeric_limits<double>::infinity();
   EXPECT_THROW(RecentViews(SensorModel::vlp16(), c), ConfigError);
 }
 
