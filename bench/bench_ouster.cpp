@@ -1,7 +1,6 @@
 // Ouster decoding benchmark: an OS1-128 at 1024x10 (640 lidar packets per second, RNG19 single
 // return) encoded by tests/support/ouster_encoder, one second per iteration through one
-// long-running decoder. Goal >= 100x real time. The Reference variant runs the naive per-pixel
-// kernel (OusterDecoderOptions::reference_kernel) for comparison.
+// long-running decoder. Goal >= 100x real time.
 
 #include <benchmark/benchmark.h>
 
@@ -16,8 +15,7 @@ namespace {
 
 using namespace ringtrack;
 
-void decode(benchmark::State& state, const std::string& profile, bool recycle,
-            bool reference = false) {
+void decode(benchmark::State& state, const std::string& profile, bool recycle) {
   test::OusterEncoderOptions eo;
   eo.profile = profile;
   eo.pixels_per_column = 128;
@@ -36,9 +34,7 @@ void decode(benchmark::State& state, const std::string& profile, bool recycle,
           }));
     }
   }
-  sensors::ouster::OusterDecoderOptions options;
-  options.reference_kernel = reference;  // the naive per-pixel kernel the fast one must match
-  sensors::ouster::OusterDecoder decoder(meta, options);
+  sensors::ouster::OusterDecoder decoder(meta);
   std::size_t scans = 0;
   for (auto _ : state) {
     for (const auto& p : packets) {
@@ -67,11 +63,6 @@ void BM_DecodeOusterOs1_128FreshScans(benchmark::State& state) {
   decode(state, "RNG19_RFL8_SIG16_NIR16", false);
 }
 BENCHMARK(BM_DecodeOusterOs1_128FreshScans)->Unit(benchmark::kMillisecond);
-
-void BM_DecodeOusterOs1_128Reference(benchmark::State& state) {
-  decode(state, "RNG19_RFL8_SIG16_NIR16", true, true);
-}
-BENCHMARK(BM_DecodeOusterOs1_128Reference)->Unit(benchmark::kMillisecond);
 
 void BM_DecodeOusterOs1_128LowBandwidth(benchmark::State& state) {
   decode(state, "RNG15_RFL8_NIR8", true);

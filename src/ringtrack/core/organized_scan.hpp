@@ -47,22 +47,6 @@ class OrganizedScan {
   /// the point from the model's geometry at the column's azimuth.
   void set_range(const SensorModel& model, int ring, int column, float range_m, float intensity);
 
-  /// Writable views of the per-cell arrays, for decoders that fill many cells of a row in one
-  /// loop (the Ouster decoder). No checks: the writer keeps what set_return / set_invalid keep
-  /// (a valid cell has a finite range and point; an invalid one NaN range and point, intensity 0).
-  struct CellArrays {
-    float* range_m;
-    float* intensity;
-    float* x;
-    float* y;
-    float* z;
-    ReturnStatus* status;
-  };
-  /// The arrays of every cell (index(ring, column) as for the accessors).
-  CellArrays cell_arrays() {
-    return {range_m_.data(), intensity_.data(), x_.data(), y_.data(), z_.data(), status_.data()};
-  }
-
   [[nodiscard]] bool valid(std::size_t i) const { return status_[i] == ReturnStatus::kValid; }
   [[nodiscard]] ReturnStatus status(std::size_t i) const { return status_[i]; }
   [[nodiscard]] float range_m(std::size_t i) const { return range_m_[i]; }

@@ -8,7 +8,6 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
-#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -99,102 +98,6 @@ TEST_P(OusterRoundTrip, EveryPixelAsEncoded) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Profiles, OusterRoundTrip,
-                         ::testing::Values("LEGACY", "RNG19_RFL8_SIG16_NIR16",
-                                           "RNG19_RFL8_SIG16_NIR16_DUAL", "RNG15_RFL8_NIR8"));
-
-// Pixels of every kind: none, too close (< 0.3 m), too far (> 250 m), valid near and far.
-test::OusterEcho mixed_echo(int m, int beam) {
-  const auto h = static_cast<std::uint32_t>((m * 2654435761LL + beam * 40503) & 0xFFFFFFFF);
-  switch (h % 11) {
-    case 0:
-      return {};
-    case 1:
-      return {200, 600, 7};  // too close
-    case 2:
-      return {255'000, 255'008, 9};  // too far (a multiple of 8, as RNG15 holds it)
-    default:
-      return {800 + 8 * ((h >> 8) % 20'000), 0, static_cast<std::uint8_t>(h >> 24)};
-  }
-}
-
-// Every cell's status and the bits of its range, intensity and point.
-void expect_same_bits(const core::OrganizedScan& a, const core::OrganizedScan& b) {
-  ASSERT_EQ(a.size(), b.size());
-  const auto same = [](const std::vector<float>& x, const std::vector<float>& y, const char* what) {
-    for (std::size_t i = 0; i < x.size(); ++i) {
-      ASSERT_EQ(std::bit_cast<std::uint32_t>(x[i]), std::bit_cast<std::uint32_t>(y[i]))
-          << what << " of cell " << i;
-    }
-  };
-  ASSERT_EQ(a.statuses(), b.statuses());
-  same(a.ranges(), b.ranges(), "range");
-  same(a.intensities(), b.intensities(), "intensity");
-  same(a.xs(), b.xs(), "x");
-  same(a.ys(), b.ys(), "y");
-  same(a.zs(), b.zs(), "z");
-  EXPECT_EQ(a.column_stamp_ns, b.column_stamp_ns);
-  EXPECT_EQ(a.column_azimuth_rad, b.column_azimuth_rad);
-}
-
-class OusterKernels : public ::testing::TestWithParam<const char*> {};
-
-// The row-by-row kernel against the naive per-pixel one (set_return / set_invalid), bit for bit,
-// over frames with every kind of pixel, a repeated packet and a frame with a packet missing.
-TEST_P(OusterKernels, FastKernelMatchesTheReferenceBitForBit) {
-  test::OusterEncoderOptions eo;
-  eo.profile = GetParam();
-  eo.pixels_per_column = 64;
-  const OusterMetadata meta = parse_ouster_metadata(test::ouster_metadata_json(eo), "k.json");
-  OusterDecoderOptions naive;
-  naive.reference_kernel = true;
-  naive.keep_partial_scans = true;
-  OusterDecoderOptions fast = naive;
-  fast.reference_kernel = false;
-  OusterDecoder reference(meta, naive);
-  OusterDecoder decoder(meta, fast);
-  int scans = 0;
-  // Compares the scans both have completed; the fast decoder gets its scans back for reuse, so
-  // stale cells of a recycled scan would show.
-  const auto compare_ready = [&] {
-    while (auto want = reference.pop_scan()) {
-      auto got = decoder.pop_scan();
-      ASSERT_TRUE(got.has_value());
-      SCOPED_TRACE(scans);
-      expect_same_bits(*want, *got);
-      std::size_t close = 0, far = 0;
-      for (std::size_t i = 0; i < got->size(); ++i) {
-        close += got->status(i) == core::ReturnStatus::kTooClose;
-        far += got->status(i) == core::ReturnStatus::kTooFar;
-      }
-      EXPECT_GT(close, 1000u);  // both invalid kinds were exercised
-      EXPECT_GT(far, 1000u);
-      EXPECT_GT(got->valid_count(), 40'000u);
-      decoder.recycle(std::move(*got));
-      ++scans;
-    }
-  };
-  for (int frame = 0; frame < 3; ++frame) {
-    eo.frame_id = frame;
-    for (int m = 0; m < 1024; m += eo.columns_per_packet) {
-      if (frame == 1 && m == 512) continue;  // a lost packet
-      const auto packet =
-          test::encode_ouster_packet(eo, m, frame * 100'000'000LL + m * 97'656LL, mixed_echo);
-      const int copies = m == 256 ? 2 : 1;  // a repeated packet
-      for (int k = 0; k < copies; ++k) {
-        reference.add_packet(packet, 0);
-        decoder.add_packet(packet, 0);
-        compare_ready();
-      }
-    }
-  }
-  reference.finish();
-  decoder.finish();
-  compare_ready();
-  EXPECT_EQ(scans, 3);
-  EXPECT_FALSE(decoder.pop_scan().has_value());
-}
-
-INSTANTIATE_TEST_SUITE_P(Profiles, OusterKernels,
                          ::testing::Values("LEGACY", "RNG19_RFL8_SIG16_NIR16",
                                            "RNG19_RFL8_SIG16_NIR16_DUAL", "RNG15_RFL8_NIR8"));
 

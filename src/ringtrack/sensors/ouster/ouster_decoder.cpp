@@ -1,7 +1,6 @@
 #include "ringtrack/sensors/ouster/ouster_decoder.hpp"
 
 #include <cmath>
-#include <limits>
 #include <numbers>
 
 #include "ringtrack/core/error.hpp"
@@ -100,35 +99,17 @@ OusterDecoder::OusterDecoder(OusterMetadata metadata, OusterDecoderOptions optio
   rotation_ = {t[0], t[1], t[2], t[4], t[5], t[6], t[8], t[9], t[10]};
   translation_mm_ = {t[3], t[7], t[11]};
   yaw_rad_ = std::atan2(t[4], t[0]);
-  build_point_table();
-  const auto pixels = static_cast<std::size_t>(metadata_.columns_per_packet) * beams;
-  pixel_range_mm_.resize(pixels);
-  pixel_reflectivity_.resize(pixels);
-  packet_columns_.reserve(static_cast<std::size_t>(metadata_.columns_per_packet));
-}
-
-void OusterDecoder::build_point_table() {
-  // The point is linear in the range: p = range * direction + offset (the formula of point()
-  // with the transform folded in), so decoding a pixel is 3 multiply-adds instead of the
-  // formula's trigonometry and rotation.
-  const int w = metadata_.columns_per_frame;
-  const int beams = metadata_.pixels_per_column;
-  point_table_.resize(static_cast<std::size_t>(w) * static_cast<std::size_t>(beams));
-  for (int b = 0; b < beams; ++b) {
-    for (int m = 0; m < w; ++m) {
-      const Eigen::Vector3d at0 = point(b, m, 0.0);
-      const Eigen::Vector3d at1 = point(b, m, 1000.0);  // 1 m
-      auto& k = point_table_[static_cast<std::size_t>(b) * static_cast<std::size_t>(w) +
-                             static_cast<std::size_t>(m)];
-      k.direction = (at1 - at0).cast<float>();
-      k.offset = at0.cast<float>();
-      // The fast kernel writes points without set_return's finiteness test; a metadata value
-      // that overflows a float would otherwise put an infinite point into a valid cell.
-      if (!k.direction.allFinite() || !k.offset.allFinite()) {
-        throw core::InputError(metadata_.source + ": beam " + std::to_string(b) +
-                               " gives a non-finite point direction (beam angles, origin offset "
-                               "or lidar_to_sensor_transform out of range)");
-      }
+  // Per (measurement id, beam): the point is linear in the range, p = range * direction +
+  // offset (the formula of point() with the transform folded in), so decoding is 3 FMAs.
+  lut_direction_.resize(static_cast<std::size_t>(w) * beams);
+  lut_offset_.resize(lut_direction_.size());
+  for (int m = 0; m < w; ++m) {
+    for (std::size_t b = 0; b < beams; ++b) {
+      const Eigen::Vector3d at0 = point(static_cast<int>(b), m, 0.0);
+      const Eigen::Vector3d at1 = point(static_cast<int>(b), m, 1000.0);  // 1 m
+      const std::size_t k = static_cast<std::size_t>(m) * beams + b;
+      lut_direction_[k] = (at1 - at0).cast<float>();
+      lut_offset_[k] = at0.cast<float>();
     }
   }
 }
@@ -155,9 +136,7 @@ void OusterDecoder::start_frame(int frame_id) {
   if (spare_ && spare_->rings() == model_.rings() && spare_->columns() == model_.columns()) {
     scan_ = std::move(spare_);
     spare_.reset();
-    // The fast kernel writes every cell of the frame once (write_row, clear_unseen_columns), so
-    // the 2.7 MB of an OS1-128 scan are not written twice; the naive kernel needs a clean scan.
-    if (options_.reference_kernel) scan_->reset();
+    scan_->reset();
   } else {
     scan_.emplace(model_.rings(), model_.columns());
   }
@@ -186,16 +165,14 @@ void OusterDecoder::add_packet(std::span<const std::uint8_t> payload, std::int64
   const int frame_id = legacy ? le16(p + 10) : le16(p + 2);
   if (scan_ && frame_id != frame_id_) finish_frame();
   if (!scan_) start_frame(frame_id);
-  // The column headers first (stamps, validity), then the pixels row by row: a beam's pixels of
-  // the packet's columns go to neighbouring cells of one ring, where a column at a time would
-  // write each pixel to another ring's row (128 scattered cache lines per column).
+  core::OrganizedScan& scan = *scan_;
   const int w = metadata_.columns_per_frame;
-  const std::size_t pixels =
-      static_cast<std::size_t>(metadata_.pixels_per_column) * metadata_.pixel_bytes();
-  packet_columns_.clear();
+  const int beams = metadata_.pixels_per_column;
+  const std::size_t pixels = static_cast<std::size_t>(beams) * metadata_.pixel_bytes();
+  const auto min_range = static_cast<float>(model_.min_range_m);
+  const auto max_range = static_cast<float>(model_.max_range_m);
   for (int col = 0; col < metadata_.columns_per_packet; ++col) {
-    const std::size_t offset = column_offset(metadata_, col);
-    const std::uint8_t* block = p + offset;
+    const std::uint8_t* block = p + column_offset(metadata_, col);
     const auto stamp = static_cast<std::int64_t>(le64(block));
     const int m = le16(block + 8);
     const bool valid =
@@ -208,54 +185,17 @@ void OusterDecoder::add_packet(std::span<const std::uint8_t> payload, std::int64
       ++stats_.bad_measurement_id;
       continue;
     }
-    const bool first = seen_[static_cast<std::size_t>(m)] == 0;
     seen_[static_cast<std::size_t>(m)] = 1;
     stamps_[static_cast<std::size_t>(m)] = stamp;
-    packet_columns_.push_back({offset, m, first});
-  }
-  decode_pixels(p);
-  ++stats_.decoded_packets;
-}
-
-void OusterDecoder::decode_pixels(const std::uint8_t* packet) {
-  const std::span<const PacketColumn> columns(packet_columns_);
-  if (options_.reference_kernel) {
-    decode_reference(packet, columns);
-    return;
-  }
-  switch (metadata_.profile) {  // one loop per profile: the pixel layout known at compile time
-    case OusterProfile::kLegacy:
-      decode_rows<OusterProfile::kLegacy>(packet, columns);
-      break;
-    case OusterProfile::kRng19Rfl8Sig16Nir16:
-      decode_rows<OusterProfile::kRng19Rfl8Sig16Nir16>(packet, columns);
-      break;
-    case OusterProfile::kRng19Rfl8Sig16Nir16Dual:
-      decode_rows<OusterProfile::kRng19Rfl8Sig16Nir16Dual>(packet, columns);
-      break;
-    case OusterProfile::kRng15Rfl8Nir8:
-      decode_rows<OusterProfile::kRng15Rfl8Nir8>(packet, columns);
-      break;
-  }
-}
-
-// The naive kernel: pixel by pixel, column by column, through set_return / set_invalid.
-void OusterDecoder::decode_reference(const std::uint8_t* packet,
-                                     std::span<const PacketColumn> columns) {
-  core::OrganizedScan& scan = *scan_;
-  const int w = metadata_.columns_per_frame;
-  const int beams = metadata_.pixels_per_column;
-  const auto min_range = static_cast<float>(model_.min_range_m);
-  const auto max_range = static_cast<float>(model_.max_range_m);
-  const std::size_t stride = metadata_.pixel_bytes();
-  for (const PacketColumn& column : columns) {
-    const std::uint8_t* q = packet + column.offset + first_pixel(metadata_);
+    const std::uint8_t* q = block + first_pixel(metadata_);
+    const std::size_t stride = metadata_.pixel_bytes();
+    const std::size_t lut = static_cast<std::size_t>(m) * static_cast<std::size_t>(beams);
     for (int b = 0; b < beams; ++b, q += stride) {
       OusterPixel px;
       read_pixel(q, metadata_.profile, px);
       if (px.range_mm == 0) continue;
       // Destaggered: the beam's pixel moves by its shift so that a column holds one direction.
-      int c = column.m + metadata_.pixel_shift_by_row[static_cast<std::size_t>(b)];
+      int c = m + metadata_.pixel_shift_by_row[static_cast<std::size_t>(b)];
       if (c >= w) c -= w;
       const int ring = ring_of_beam_[static_cast<std::size_t>(b)];
       const float range = static_cast<float>(px.range_mm) * 1e-3f;
@@ -267,108 +207,12 @@ void OusterDecoder::decode_reference(const std::uint8_t* packet,
         scan.set_invalid(ring, c, core::ReturnStatus::kTooFar);
         continue;
       }
-      const auto& k = point_table_[static_cast<std::size_t>(b) * static_cast<std::size_t>(w) +
-                                   static_cast<std::size_t>(column.m)];
+      const std::size_t k = lut + static_cast<std::size_t>(b);
       scan.set_return(ring, c, range, static_cast<float>(px.reflectivity),
-                      k.direction * range + k.offset);
+                      lut_direction_[k] * range + lut_offset_[k]);
     }
   }
-}
-
-// The fast kernel, in two passes. First the packet is read in its own order, column by column
-// (a sequential stream the prefetcher follows), into a small beam-major buffer of ranges and
-// reflectivities; then each beam's pixels go to neighbouring cells of its ring's row, where a
-// column at a time would write every pixel to another ring's row (scattered cache lines), and
-// reading the packet beam by beam would jump a column's size per pixel. Same arithmetic as
-// decode_reference, so the same bits (test OusterKernels.FastKernelMatchesTheReferenceBitForBit);
-// set_return's finiteness test is left out because the point table is checked finite and
-// ranges are integers x 1e-3.
-template <OusterProfile kProfile>
-void OusterDecoder::decode_rows(const std::uint8_t* packet, std::span<const PacketColumn> columns) {
-  const std::size_t n = columns.size();
-  const int beams = metadata_.pixels_per_column;
-  const std::size_t stride = metadata_.pixel_bytes();
-  for (std::size_t j = 0; j < n; ++j) {
-    const std::uint8_t* q = packet + columns[j].offset + first_pixel(metadata_);
-    for (int b = 0; b < beams; ++b, q += stride) {
-      OusterPixel px;
-      read_pixel(q, kProfile, px);
-      const std::size_t k = static_cast<std::size_t>(b) * n + j;
-      pixel_range_mm_[k] = px.range_mm;
-      pixel_reflectivity_[k] = px.reflectivity;
-    }
-  }
-  for (int b = 0; b < beams; ++b) write_row(b, columns);
-}
-
-// Second pass of decode_rows: beam b's pixels of the packet's columns into its ring's row.
-void OusterDecoder::write_row(int b, std::span<const PacketColumn> columns) {
-  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  const core::OrganizedScan::CellArrays cells = scan_->cell_arrays();
-  const int w = metadata_.columns_per_frame;
-  const auto min_range = static_cast<float>(model_.min_range_m);
-  const auto max_range = static_cast<float>(model_.max_range_m);
-  const auto ub = static_cast<std::size_t>(b);
-  const std::size_t row = static_cast<std::size_t>(ring_of_beam_[ub]) * static_cast<std::size_t>(w);
-  const int shift = metadata_.pixel_shift_by_row[ub];
-  const PointCoefficients* table = point_table_.data() + ub * static_cast<std::size_t>(w);
-  const std::uint32_t* range_mm = pixel_range_mm_.data() + ub * columns.size();
-  const std::uint16_t* reflectivity = pixel_reflectivity_.data() + ub * columns.size();
-  const auto set_invalid = [&cells](std::size_t i, core::ReturnStatus why) {
-    cells.range_m[i] = kNaN;
-    cells.intensity[i] = 0.0f;
-    cells.x[i] = cells.y[i] = cells.z[i] = kNaN;
-    cells.status[i] = why;
-  };
-  for (std::size_t j = 0; j < columns.size(); ++j) {
-    const int m = columns[j].m;
-    int c = m + shift;
-    if (c >= w) c -= w;
-    const std::size_t i = row + static_cast<std::size_t>(c);
-    if (range_mm[j] == 0) {
-      // No echo: the scan was not reset, so the measurement id's first column clears the cell;
-      // a repeated one keeps what came before, as the naive kernel does.
-      if (columns[j].first) set_invalid(i, core::ReturnStatus::kNoReturn);
-      continue;
-    }
-    const float range = static_cast<float>(range_mm[j]) * 1e-3f;
-    if (range < min_range || range > max_range) {
-      set_invalid(i,
-                  range < min_range ? core::ReturnStatus::kTooClose : core::ReturnStatus::kTooFar);
-      continue;
-    }
-    const PointCoefficients& k = table[m];
-    const Eigen::Vector3f xyz = k.direction * range + k.offset;
-    cells.range_m[i] = range;
-    cells.intensity[i] = static_cast<float>(reflectivity[j]);
-    cells.x[i] = xyz.x();
-    cells.y[i] = xyz.y();
-    cells.z[i] = xyz.z();
-    cells.status[i] = core::ReturnStatus::kValid;
-  }
-}
-
-// The fast kernel's scans are not reset: the cells of measurement ids that no packet of the
-// frame brought (lost packets, the column window) become kNoReturn here.
-void OusterDecoder::clear_unseen_columns() {
-  constexpr float kNaN = std::numeric_limits<float>::quiet_NaN();
-  const core::OrganizedScan::CellArrays cells = scan_->cell_arrays();
-  const int w = metadata_.columns_per_frame;
-  for (int m = 0; m < w; ++m) {
-    if (seen_[static_cast<std::size_t>(m)] != 0) continue;
-    for (int b = 0; b < metadata_.pixels_per_column; ++b) {
-      const auto ub = static_cast<std::size_t>(b);
-      int c = m + metadata_.pixel_shift_by_row[ub];
-      if (c >= w) c -= w;
-      const std::size_t i =
-          static_cast<std::size_t>(ring_of_beam_[ub]) * static_cast<std::size_t>(w) +
-          static_cast<std::size_t>(c);
-      cells.range_m[i] = kNaN;
-      cells.intensity[i] = 0.0f;
-      cells.x[i] = cells.y[i] = cells.z[i] = kNaN;
-      cells.status[i] = core::ReturnStatus::kNoReturn;
-    }
-  }
+  ++stats_.decoded_packets;
 }
 
 void OusterDecoder::finish_frame() {
@@ -393,7 +237,6 @@ void OusterDecoder::finish_frame() {
   const int shift0 = metadata_.pixel_shift_by_row[0];
   const double beam0_az = -kTwoPi * metadata_.beam_azimuth_deg[0] / 360.0;
   const double period_ns = 1e9 / (metadata_.scan_rate_hz * w);
-  if (!options_.reference_kernel) clear_unseen_columns();
   // A stamp for columns that were not received: continued from the nearest received one.
   int anchor = -1;
   for (int m = 0; m < w; ++m) {
@@ -413,8 +256,6 @@ void OusterDecoder::finish_frame() {
     } else if (anchor >= 0) {
       scan.column_stamp_ns[static_cast<std::size_t>(c)] =
           stamps_[static_cast<std::size_t>(anchor)] + std::llround((c - anchor) * period_ns);
-    } else {
-      scan.column_stamp_ns[static_cast<std::size_t>(c)] = 0;  // a recycled scan is not reset
     }
   }
   scan.stamp_ns = scan.column_stamp_ns[0];

@@ -19,9 +19,6 @@ namespace ringtrack::sensors::ouster {
 /// Options of the decoder.
 struct OusterDecoderOptions {
   bool keep_partial_scans{false};  ///< emit frames with columns of the window missing
-  /// Decode pixel by pixel through OrganizedScan::set_return (the naive kernel the fast,
-  /// row-by-row one must match bit for bit; tests and benchmarks only).
-  bool reference_kernel{false};
 };
 
 /// Counters; every skipped packet and missing column is counted here.
@@ -77,22 +74,8 @@ class OusterDecoder {
   [[nodiscard]] Eigen::Vector3d point(int beam, int measurement_id, double range_mm) const;
 
  private:
-  /// A column of the packet being decoded: its block offset and measurement id, and whether
-  /// this is the first column of that id in the frame.
-  struct PacketColumn {
-    std::size_t offset;
-    int m;
-    bool first;
-  };
   void start_frame(int frame_id);
   void finish_frame();
-  void build_point_table();
-  void decode_pixels(const std::uint8_t* packet);
-  void decode_reference(const std::uint8_t* packet, std::span<const PacketColumn> columns);
-  template <OusterProfile kProfile>
-  void decode_rows(const std::uint8_t* packet, std::span<const PacketColumn> columns);
-  void write_row(int beam, std::span<const PacketColumn> columns);
-  void clear_unseen_columns();
 
   OusterMetadata metadata_;
   OusterDecoderOptions options_;
@@ -103,17 +86,7 @@ class OusterDecoder {
   std::array<double, 9> rotation_{};
   std::array<double, 3> translation_mm_{};
   double yaw_rad_{0};
-  /// The point of a pixel is range x direction + offset (the manual's formula and the
-  /// transform folded in), per (beam, measurement id), beam-major: a beam's row of a packet
-  /// reads consecutive entries.
-  struct PointCoefficients {
-    Eigen::Vector3f direction;
-    Eigen::Vector3f offset;
-  };
-  std::vector<PointCoefficients> point_table_;
-  std::vector<PacketColumn> packet_columns_;   // of the packet at hand (no allocation per packet)
-  std::vector<std::uint32_t> pixel_range_mm_;  // the packet's pixels, beam-major
-  std::vector<std::uint16_t> pixel_reflectivity_;  // (decode_rows' first pass)
+  std::vector<Eigen::Vector3f> lut_direction_, lut_offset_;  // per (measurement id, beam)
 
   std::optional<core::OrganizedScan> scan_;
   std::optional<core::OrganizedScan> spare_;
