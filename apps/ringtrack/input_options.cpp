@@ -29,9 +29,9 @@ void InputOptions::add_to(CLI::App& command) {
                      "bag topic: velodyne_msgs/VelodyneScan, pandar_msgs/PandarScan or "
                      "sensor_msgs/PointCloud2 (default: the first one with messages)");
   command.add_option("--model,--sensor", model,
-                     "vlp16 | vlp32c | hdl32e | Pandar40P | Pandar64 | PandarQT64 | PandarXT16 | "
-                     "PandarXT32 (default: from the packets' product byte or Hesai header; point "
-                     "clouds: vlp16 up to 16 rings; ringtrack sensors)");
+                     "vlp16 | vlp32c | hdl32e | hdl64e | Pandar40P | Pandar64 | PandarQT64 | "
+                     "PandarXT16 | PandarXT32 (default: from the packets' product byte or Hesai "
+                     "header; point clouds: vlp16 up to 16 rings; ringtrack sensors)");
   command.add_option("--calibration", calibration,
                      "Hesai: the sensor's angle-correction CSV (channel, elevation, azimuth)");
   command.add_option("--metadata", metadata,

@@ -98,7 +98,7 @@ void bind_config(py::module_& m) {
 void bind_sensor_model(py::module_& m) {
   py::class_<core::SensorModel>(m, "SensorModel", "A spinning LiDAR's geometry and timing.")
       .def_static("by_name", &core::SensorModel::by_name, py::arg("name"),
-                  py::arg("scan_rate_hz") = 10.0, "vlp16, vlp32c, hdl32e, ... (`ringtrack sensors`)")
+                  py::arg("scan_rate_hz") = 10.0, "vlp16, vlp32c, hdl32e, hdl64e (`ringtrack sensors`)")
       .def_static("vlp16", &core::SensorModel::vlp16, py::arg("scan_rate_hz") = 10.0)
       .def_readonly("name", &core::SensorModel::name)
       .def_property_readonly("rings", &core::SensorModel::rings)
@@ -106,6 +106,8 @@ void bind_sensor_model(py::module_& m) {
       .def_readonly("min_range_m", &core::SensorModel::min_range_m)
       .def_readonly("max_range_m", &core::SensorModel::max_range_m)
       .def_readonly("scan_rate_hz", &core::SensorModel::scan_rate_hz)
+      .def_readonly("vertical_offset_m", &core::SensorModel::vertical_offset_m,
+                    "Per ring, bottom to top: the beam origin's height above the sensor origin.")
       .def_property_readonly("elevation_deg", [](const core::SensorModel& s) {
         std::vector<double> deg;
         for (const double r : s.elevation_rad) deg.push_back(r * 180.0 / M_PI);

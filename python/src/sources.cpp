@@ -7,6 +7,7 @@
 
 #include "bindings.hpp"
 #include "ringtrack/core/error.hpp"
+#include "ringtrack/core/sensor_model.hpp"
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/sequence.hpp"
 
@@ -96,12 +97,23 @@ void bind_sources(py::module_& m) {
       "(docs/inputs.md); Hesai needs calibration=, Ouster metadata=.");
 
   py::class_<SequenceIterator>(m, "Sequence",
-                               "A sequence folder or a folder of organized PCD files: iterates "
-                               "(scan, pose, labels or None).")
+                               "A sequence folder, or a folder of PCD files or KITTI-style .bin "
+                               "files: iterates (scan, pose, labels or None).")
       .def(py::init([](const std::string& folder, const std::string& poses,
-                       const std::string& poses_format) {
+                       const std::string& poses_format, const std::string& sensor,
+                       double scan_rate_hz) {
              io::SequenceReadOptions o;
              o.poses = poses;
+             o.scan_rate_hz = scan_rate_hz;
+             // Plain folders: the grid clouds without rings are organized into (what `ringtrack
+             // run --sensor` gives); without it a sensor measured on the first cloud.
+             if (!sensor.empty()) {
+               try {
+                 o.sensor = core::SensorModel::by_name(sensor, scan_rate_hz);
+               } catch (const core::Error& e) {
+                 throw core::ConfigError(std::string("sensor: ") + e.what());
+               }
+             }
              if (poses_format == "kitti") {
                o.poses_format = io::PoseFileFormat::kKitti;
              } else if (poses_format != "tum") {
@@ -110,7 +122,10 @@ void bind_sources(py::module_& m) {
              }
              return std::make_unique<SequenceIterator>(folder, o);
            }),
-           py::arg("folder"), py::arg("poses") = "", py::arg("poses_format") = "tum")
+           py::arg("folder"), py::arg("poses") = "", py::arg("poses_format") = "tum",
+           py::arg("sensor") = "", py::arg("scan_rate_hz") = 10.0,
+           "sensor: a built-in model (`ringtrack sensors`, e.g. hdl64e for KITTI) for plain "
+           "folders; scan_rate_hz: their stamps (i / rate) without stamps.txt.")
       .def("__iter__", [](SequenceIterator& s) -> SequenceIterator& { return s; })
       .def("__next__", &SequenceIterator::next)
       .def("__len__", [](const SequenceIterator& s) { return s.reader().size(); })

@@ -212,3 +212,48 @@ def test_odometry_follows_a_flying_sensor():
     assert len(errors) == 30
     assert max(errors) < 0.1
     assert not result["degenerate"]
+
+
+def _hdl64e_cloud(model):
+    """A wall 10 m around an HDL-64E: every ring's beam, from its own origin (vertical offsets),
+    at every third column's centre of the clockwise grid, so each point owns one cell."""
+    columns = model.columns
+    step = 2 * np.pi / columns
+    rows = []
+    for ring, (elevation_deg, offset_m) in enumerate(
+            zip(model.elevation_deg, model.vertical_offset_m)):
+        el = np.radians(elevation_deg)
+        cols = np.arange(ring % 3, columns, 3)
+        az = -cols * step  # clockwise from +x, column 0 centred on +x
+        d = 10.0 / np.cos(el)
+        xyz = np.stack([10.0 * np.cos(az), 10.0 * np.sin(az),
+                        np.full(az.shape, d * np.sin(el) + offset_m)], axis=1)
+        rows.append(np.column_stack([xyz, np.full(len(cols), ring, dtype=float)]))
+    return np.concatenate(rows).astype(np.float32)
+
+
+def test_sequence_reads_kitti_bin_folders_with_a_named_sensor(tmp_path):
+    model = rt.SensorModel.by_name("hdl64e")
+    assert model.rings == 64 and len(model.vertical_offset_m) == 64
+    cloud = _hdl64e_cloud(model)  # x y z and, as intensity, the ring the point came from
+    rng = np.random.default_rng(3)
+    folder = tmp_path / "velodyne"
+    folder.mkdir()
+    for k in range(2):
+        rng.permutation(cloud).tofile(folder / f"{k:06d}.bin")  # KITTI: float32 x y z intensity
+    sequence = rt.Sequence(str(folder), sensor="hdl64e")
+    assert len(sequence) == 2 and sequence.model.name == "HDL-64E"
+    scans = list(sequence)
+    for scan, _, labels in scans:
+        assert labels is None
+        assert scan.rings == 64 and scan.columns == model.columns
+        assert scan.valid_count() == len(cloud)  # every point in a cell of its own
+        valid = np.isfinite(scan.ranges)
+        ring_of_cell = np.broadcast_to(np.arange(64)[:, None], valid.shape)
+        # The intensity carries each point's true ring: the organized rows recover them all.
+        np.testing.assert_array_equal(scan.intensity[valid], ring_of_cell[valid])
+    assert scans[1][0].stamp_ns - scans[0][0].stamp_ns == 100_000_000  # i / 10 Hz
+    with pytest.raises(rt.ConfigError, match="needs its angle-correction file"):
+        rt.Sequence(str(folder), sensor="PandarXT32")
+    with pytest.raises(rt.ConfigError, match="expected vlp16, vlp32c, hdl32e or hdl64e"):
+        rt.Sequence(str(folder), sensor="hdl128")

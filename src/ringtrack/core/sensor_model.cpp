@@ -145,6 +145,34 @@ SensorModel SensorModel::hdl32e(double scan_rate_hz) {
   return m;
 }
 
+SensorModel SensorModel::hdl64e(double scan_rate_hz) {
+  // HDL-64E S2 user manual (nominal, no unit's calibration): the upper block's 32 lasers span
+  // +2 .. -8.33 deg in 1/3 deg steps, the lower block's 32 lasers -8.83 .. -24.33 deg in 1/2 deg
+  // steps; both blocks fire together, a firing cycle every 48 us (0.1728 deg at 10 Hz, the
+  // manual's 0.0864 deg at 5 Hz). Beam origins: the blocks' lasers sit about 0.20 m (upper) and
+  // 0.11 m (lower) above the sensor origin (vert_offset_correction of published S2.1 unit
+  // calibrations: 0.19-0.21 m and 0.105-0.122 m). Laser ids here run top to bottom within each
+  // block (the real ids interleave; they matter only to a packet decoder, which this sensor
+  // does not have). A real unit's elevations differ from these by up to a few tenths of a
+  // degree (docs/inputs.md).
+  std::vector<double> elevation;
+  std::vector<double> offset_mm;
+  for (int i = 0; i < 32; ++i) {
+    elevation.push_back(2.0 - i / 3.0);
+    offset_mm.push_back(200.0);
+  }
+  for (int i = 0; i < 32; ++i) {
+    elevation.push_back(-8.83 - 0.5 * i);
+    offset_mm.push_back(110.0);
+  }
+  const std::vector<double> firing(64, 0.0);
+  SensorModel m = from_laser_tables("HDL-64E", elevation, offset_mm, {}, firing);
+  m.firing_sequence_us = 48.0;
+  m.scan_rate_hz = scan_rate_hz;
+  m.max_range_m = 120.0;
+  return m;
+}
+
 SensorModel SensorModel::generic(const std::vector<double>& elevations_deg, int columns,
                                  double scan_rate_hz, double max_range_m) {
   if (elevations_deg.empty() || columns < 8) {
@@ -158,12 +186,77 @@ SensorModel SensorModel::generic(const std::vector<double>& elevations_deg, int 
   return m;
 }
 
+namespace {
+
+constexpr const char* kHesaiNeeds =
+    "its angle-correction file (--calibration FILE, with its packets; the library holds no "
+    "nominal Hesai table, so its point clouds cannot be organized by name)";
+constexpr const char* kOusterNeeds =
+    "its metadata JSON (--metadata FILE, with its packets; beam angles differ per unit and the "
+    "library holds no nominal Ouster table)";
+
+// The one table of sensor names: --sensor, sequence.yaml and `ringtrack sensors` read it.
+constexpr BuiltInSensor kBuiltIns[] = {
+    {"vlp16", "Velodyne", "puck", &SensorModel::vlp16, ""},
+    {"vlp32c", "Velodyne", "ultrapuck", &SensorModel::vlp32c, ""},
+    {"hdl32e", "Velodyne", "hdl32", &SensorModel::hdl32e, ""},
+    {"hdl64e", "Velodyne", "hdl64 hdl64es2 kitti", &SensorModel::hdl64e, ""},
+    {"Pandar40P", "Hesai", "40p", nullptr, kHesaiNeeds},
+    {"Pandar64", "Hesai", "p64", nullptr, kHesaiNeeds},
+    {"PandarQT64", "Hesai", "qt64", nullptr, kHesaiNeeds},
+    {"PandarXT16", "Hesai", "xt16", nullptr, kHesaiNeeds},
+    {"PandarXT32", "Hesai", "xt32", nullptr, kHesaiNeeds},
+    {"OS0/OS1/OS2", "Ouster", "os0* os1* os2* ouster*", nullptr, kOusterNeeds},
+};
+
+// True when the normalized key is the row's name or one of its space-separated aliases; an
+// alias ending in '*' matches as a prefix ("os1*": os1-64, OS-1-128, ...).
+bool matches(const BuiltInSensor& row, const std::string& key) {
+  if (normalized(row.name) == key) return true;
+  const std::string aliases = row.aliases;
+  std::size_t start = 0;
+  while (start < aliases.size()) {
+    const std::size_t end = std::min(aliases.find(' ', start), aliases.size());
+    std::string alias = aliases.substr(start, end - start);
+    start = end + 1;
+    if (!alias.empty() && alias.back() == '*') {
+      alias.pop_back();
+      if (!alias.empty() && key.rfind(alias, 0) == 0) return true;
+    } else if (!alias.empty() && alias == key) {
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace
+
+std::span<const BuiltInSensor> built_in_sensors() {
+  return kBuiltIns;
+}
+
+std::string built_in_model_list() {
+  std::vector<std::string> names;
+  for (const auto& row : kBuiltIns) {
+    if (row.make != nullptr) names.emplace_back(row.name);
+  }
+  std::string s;
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    s += (i == 0 ? "" : (i + 1 == names.size() ? " or " : ", ")) + names[i];
+  }
+  return s;
+}
+
 SensorModel SensorModel::by_name(const std::string& name, double scan_rate_hz) {
   const std::string key = normalized(name);
-  if (key == "vlp16" || key == "puck") return vlp16(scan_rate_hz);
-  if (key == "vlp32c" || key == "ultrapuck") return vlp32c(scan_rate_hz);
-  if (key == "hdl32e" || key == "hdl32") return hdl32e(scan_rate_hz);
-  throw Error("unknown sensor model '" + name + "' (expected vlp16, vlp32c or hdl32e)");
+  for (const auto& row : kBuiltIns) {
+    if (!matches(row, key)) continue;
+    if (row.make != nullptr) return row.make(scan_rate_hz);
+    throw Error("sensor '" + name + "' (" + row.family + ") has no built-in geometry: it needs " +
+                row.needs);
+  }
+  throw Error("unknown sensor model '" + name + "' (expected " + built_in_model_list() +
+              "; `ringtrack sensors` lists every sensor)");
 }
 
 }  // namespace ringtrack::core

@@ -2,6 +2,7 @@
 /// Geometry and timing of a spinning multi-ring LiDAR.
 
 #include <Eigen/Core>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -40,11 +41,32 @@ struct SensorModel {
   static SensorModel vlp32c(double scan_rate_hz = 10.0);
   /// Velodyne HDL-32E: 32 rings, -30.67..10.67 deg, 100 m.
   static SensorModel hdl32e(double scan_rate_hz = 10.0);
+  /// Velodyne HDL-64E S2 (KITTI's sensor), nominal: 32 upper rings +2..-8.33 deg in 1/3 deg
+  /// steps, 32 lower rings -8.83..-24.33 deg in 1/2 deg steps, beam origins 0.20 / 0.11 m up,
+  /// 120 m. For point clouds (no HDL-64E packet decoder); see docs/inputs.md for its error.
+  static SensorModel hdl64e(double scan_rate_hz = 10.0);
   /// A generic sensor from a list of elevations (degrees, any order) and a column count.
   static SensorModel generic(const std::vector<double>& elevations_deg, int columns,
                              double scan_rate_hz = 10.0, double max_range_m = 100.0);
-  /// A built-in model by name ("vlp16", "VLP-16", "vlp32c", "hdl32e"); throws on unknown names.
+  /// A built-in model by name ("vlp16", "VLP-16", "vlp32c", "hdl32e", "hdl64e"; case and
+  /// punctuation ignored). Throws core::Error listing the names for unknown ones, and saying
+  /// what is needed for the known sensors without nominal geometry (Hesai, Ouster).
   static SensorModel by_name(const std::string& name, double scan_rate_hz = 10.0);
 };
+
+/// One row of the table of sensor names ringtrack knows (`--sensor`, sequence.yaml, Python).
+struct BuiltInSensor {
+  const char* name;     ///< the canonical spelling, e.g. "hdl64e", "PandarXT32"
+  const char* family;   ///< "Velodyne", "Hesai", "Ouster"
+  const char* aliases;  ///< other accepted spellings, normalized (lower case, no punctuation)
+  /// The nominal geometry; nullptr when the library has none and the sensor's file is needed.
+  SensorModel (*make)(double scan_rate_hz);
+  const char* needs;  ///< without geometry: what provides it (for errors and `ringtrack sensors`)
+};
+
+/// The table, Velodyne first; the rows with geometry are what by_name builds.
+std::span<const BuiltInSensor> built_in_sensors();
+/// The names with geometry, e.g. "vlp16, vlp32c, hdl32e or hdl64e" (for messages).
+std::string built_in_model_list();
 
 }  // namespace ringtrack::core

@@ -458,8 +458,8 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
   const int cloud_rings = count_rings(cloud, fring, point_rows);
   if (!model_) {
     if (cloud_rings > 16) {
-      fail("has " + std::to_string(cloud_rings) +
-           " rings: name the sensor model (vlp32c or hdl32e)");
+      fail("has " + std::to_string(cloud_rings) + " rings: name the sensor model (" +
+           core::built_in_model_list() + ")");
     }
     model_ = core::SensorModel::vlp16(options_.scan_rate_hz);
   }

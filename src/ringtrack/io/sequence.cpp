@@ -108,10 +108,11 @@ SequenceMeta SequenceMeta::for_sensor(const core::SensorModel& model, int column
   SequenceMeta meta;
   meta.scan_rate_hz = model.scan_rate_hz;
   meta.columns = columns;
-  for (const char* name : {"vlp16", "vlp32c", "hdl32e"}) {
-    const auto builtin = core::SensorModel::by_name(name, model.scan_rate_hz);
+  for (const auto& row : core::built_in_sensors()) {
+    if (row.make == nullptr) continue;
+    const auto builtin = row.make(model.scan_rate_hz);
     if (builtin.name == model.name && builtin.elevation_rad == model.elevation_rad) {
-      meta.sensor = name;
+      meta.sensor = row.name;
       return meta;
     }
   }
@@ -164,13 +165,14 @@ SequenceMeta read_sequence_yaml(const fs::path& path) {
       }
       have_version = true;
     } else if (key == "sensor") {
-      meta.sensor = lower(yaml_as<std::string>(value, where, "vlp16, vlp32c, hdl32e or generic"));
+      const std::string expected = core::built_in_model_list() + " (or generic)";
+      meta.sensor = lower(yaml_as<std::string>(value, where, expected.c_str()));
       if (meta.sensor != "generic") {
         try {
           core::SensorModel::by_name(meta.sensor);
         } catch (const core::Error&) {
-          throw core::InputError(where + ": unknown sensor '" + meta.sensor +
-                                 "' (expected vlp16, vlp32c, hdl32e or generic)");
+          throw core::InputError(where + ": unknown sensor '" + meta.sensor + "' (expected " +
+                                 core::built_in_model_list() + " or generic)");
         }
       }
       have_sensor = true;

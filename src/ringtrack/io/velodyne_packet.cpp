@@ -108,7 +108,9 @@ VelodyneLayout VelodyneLayout::of(const core::SensorModel& model) {
   layout.distance_unit_m = model.name == "VLP-32C" ? kVlp32cDistanceUnitM : kVelodyneDistanceUnitM;
   if (model.rings() != 16 && model.rings() != 32) {
     throw core::InputError("velodyne: model " + model.name + " has " +
-                           std::to_string(model.rings()) + " rings; expected 16 or 32");
+                           std::to_string(model.rings()) +
+                           " rings; packets are decoded for 16 and 32 rings only (vlp16, vlp32c, "
+                           "hdl32e; the HDL-64E's point clouds are organized, not its packets)");
   }
   return layout;
 }

@@ -88,7 +88,8 @@ void expect_recovered(const SensorModel& model, const sim::SimpleScene& scene) {
 TEST(CloudOrganizer, RecoversFlattenedShuffledScansOfEachModel) {
   // VLP-16: beam origins up to 11 mm off the axis; VLP-32C: per-laser azimuth offsets and rings
   // 0.33 deg apart; HDL-32E: 32 evenly spaced rings; a generic 64-ring sensor, without and with
-  // large beam offsets.
+  // large beam offsets; the built-in HDL-64E (two blocks of 1/3 and 1/2 deg gaps, beam origins
+  // 0.11 / 0.20 m up).
   std::vector<double> e64;
   for (int r = 0; r < 64; ++r) e64.push_back(-24.8 + 0.42 * r);
   SensorModel hdl64_like = SensorModel::generic(e64, 2048, 10.0, 120.0);
@@ -96,7 +97,7 @@ TEST(CloudOrganizer, RecoversFlattenedShuffledScansOfEachModel) {
   // the sensor origin a return at 5 m is 5 rings off its own.
   for (int r = 0; r < 64; ++r) hdl64_like.vertical_offset_m[r] = r < 32 ? 0.14 : 0.20;
   for (const auto& model : {SensorModel::vlp16(), SensorModel::vlp32c(), SensorModel::hdl32e(),
-                            SensorModel::generic(e64, 2048), hdl64_like}) {
+                            SensorModel::generic(e64, 2048), hdl64_like, SensorModel::hdl64e()}) {
     expect_recovered(model, sim::SimpleScene::demo());
     expect_recovered(model, sim::SimpleScene::hard_wall());  // returns down to 0.6 m
   }

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <numbers>
+#include <string>
+#include <vector>
 
 #include "ringtrack/core/box3.hpp"
 #include "ringtrack/core/error.hpp"
@@ -36,6 +38,64 @@ TEST(SensorModel, OtherBuiltInsAreConsistent) {
   EXPECT_NEAR(SensorModel::hdl32e().elevation_rad.back(), 10.67 * kDeg, 1e-12);
   EXPECT_EQ(SensorModel::by_name("VLP-16").name, "VLP-16");
   EXPECT_THROW(SensorModel::by_name("os1-64"), Error);
+}
+
+TEST(SensorModel, Hdl64eHasTheManualsTwoBlocks) {
+  const auto m = SensorModel::by_name("HDL-64E");
+  m.validate();
+  ASSERT_EQ(m.rings(), 64);
+  EXPECT_EQ(m.name, "HDL-64E");
+  // Lower block: -24.33 .. -8.83 in 1/2 deg steps (beam origins 0.11 m up); upper block:
+  // -8.33 .. +2 in 1/3 deg steps (0.20 m up).
+  for (int r = 0; r < 32; ++r) {
+    EXPECT_NEAR(m.elevation_rad[r], (-24.33 + 0.5 * r) * kDeg, 1e-12) << r;
+    EXPECT_NEAR(m.vertical_offset_m[r], 0.11, 1e-12);
+  }
+  for (int r = 32; r < 64; ++r) {
+    EXPECT_NEAR(m.elevation_rad[r], (2.0 - (63 - r) / 3.0) * kDeg, 1e-12) << r;
+    EXPECT_NEAR(m.vertical_offset_m[r], 0.20, 1e-12);
+  }
+  EXPECT_EQ(m.laser_of_ring[63], 0);  // the upper block's top laser
+  EXPECT_EQ(m.laser_of_ring[0], 63);  // the lower block's bottom laser
+  EXPECT_EQ(m.columns(), 2083);       // 1 / (10 Hz * 48 us)
+  EXPECT_EQ(SensorModel::by_name("kitti").rings(), 64);
+}
+
+TEST(SensorModel, OneTableOfNamesAndOneErrorListingThem) {
+  std::vector<std::string> with_geometry;
+  for (const auto& row : built_in_sensors()) {
+    if (row.make == nullptr) {
+      EXPECT_STRNE(row.needs, "") << row.name;
+      continue;
+    }
+    with_geometry.emplace_back(row.name);
+    const auto m = SensorModel::by_name(row.name, 20.0);  // the canonical spelling resolves
+    m.validate();
+    EXPECT_EQ(m.scan_rate_hz, 20.0);
+  }
+  EXPECT_EQ(with_geometry, (std::vector<std::string>{"vlp16", "vlp32c", "hdl32e", "hdl64e"}));
+  EXPECT_EQ(built_in_model_list(), "vlp16, vlp32c, hdl32e or hdl64e");
+  const auto error_of = [](const std::string& name) {
+    try {
+      (void)SensorModel::by_name(name);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_EQ(error_of("vlp64"),
+            "unknown sensor model 'vlp64' (expected vlp16, vlp32c, hdl32e or hdl64e; `ringtrack "
+            "sensors` lists every sensor)");
+  // Known sensors without nominal geometry say what provides it.
+  EXPECT_NE(error_of("PandarXT-32")
+                .find("sensor 'PandarXT-32' (Hesai) has no built-in geometry: "
+                      "it needs its angle-correction file (--calibration"),
+            std::string::npos)
+      << error_of("PandarXT-32");
+  EXPECT_NE(
+      error_of("os1-64").find("(Ouster) has no built-in geometry: it needs its metadata JSON"),
+      std::string::npos)
+      << error_of("os1-64");
 }
 
 TEST(SensorModel, GenericSortsElevations) {
