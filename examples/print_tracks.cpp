@@ -2,10 +2,11 @@
 //
 //   print_tracks RECORDING [POSES.tum]
 //
-// RECORDING is anything io::open_scan_source opens: a .pcap, a ROS 1 or ROS 2 bag, an MCAP file,
+// RECORDING is anything io::open_source opens: a .pcap, a ROS 1 or ROS 2 bag, an MCAP file,
 // a sequence folder or a folder of PCD files, or udp://0.0.0.0:2368. With a TUM pose file each
-// scan is processed at the sensor's pose at its stamp; without, the built-in LiDAR odometry
-// estimates the poses, as `ringtrack run` does. `ringtrack run` adds motion compensation from the
+// scan is processed at the sensor's pose at its stamp; without, at the pose the input carries (a
+// sequence folder's poses.txt), else the built-in LiDAR odometry estimates the poses, as
+// `ringtrack run` does. `ringtrack run` adds motion compensation from the
 // poses, skipping undecodable scans and the output files (apps/ringtrack/cmd_run.cpp).
 
 #include <cstdio>
@@ -28,16 +29,19 @@ int main(int argc, char** argv) {
     // The defaults guess the format and the sensor; ringtrack run's --format, --model, --topic,
     // --calibration etc. are these options' fields.
     const io::ScanSourceOptions options;
-    const std::unique_ptr<io::ScanSource> source = io::open_scan_source(argv[1], options);
+    const std::unique_ptr<io::ScanSource> source = io::open_source(argv[1], options);
     std::optional<io::Trajectory> poses;
     if (argc == 3) poses = io::read_tum(argv[2]);
     // Built at the first scan: a recording names its sensor model only once it is decoded.
     std::optional<pipeline::Pipeline> pipeline;
     while (std::optional<core::OrganizedScan> scan = source->next()) {
       if (!pipeline) pipeline.emplace(core::Config{}, source->model());
-      const pipeline::FrameResult& frame = poses
-                                               ? pipeline->process(*scan, poses->at(scan->stamp_ns))
-                                               : pipeline->process_with_odometry(*scan);
+      // The pose file's pose at the scan's stamp, else the one the input carries (a sequence
+      // folder's poses.txt), else the odometry's estimate.
+      std::optional<core::Pose> pose = source->pose();
+      if (poses) pose = poses->at(scan->stamp_ns);
+      const pipeline::FrameResult& frame =
+          pose ? pipeline->process(*scan, *pose) : pipeline->process_with_odometry(*scan);
       if (frame.skipped) {
         std::printf("scan skipped: %s\n", frame.skip_reason.c_str());
         continue;

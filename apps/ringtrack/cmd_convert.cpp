@@ -60,7 +60,7 @@ void run_convert(const ConvertOptions& o) {
 
   // For the whole command: a signal while the last files are written still lets them finish.
   const StopSignals stop_signals;
-  auto source = io::open_scan_source(o.input, options);
+  auto source = io::open_source(o.input, options);
   if (source->live() && !o.quiet) {
     std::cerr << "ringtrack convert: recording " << o.input << ", Ctrl-C to stop\n";
   }

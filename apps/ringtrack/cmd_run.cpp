@@ -27,14 +27,11 @@
 #include "ringtrack/io/ply.hpp"
 #include "ringtrack/io/point_spill.hpp"
 #include "ringtrack/io/poses.hpp"
-#include "ringtrack/io/rosbag_reader.hpp"
-#include "ringtrack/io/scan_source.hpp"
-#include "ringtrack/io/sequence.hpp"
 #include "ringtrack/io/text.hpp"
 #include "ringtrack/mapping/static_map.hpp"
 #include "ringtrack/odometry/odometry.hpp"
-#include "ringtrack/pipeline/deskew.hpp"
 #include "ringtrack/pipeline/pipeline.hpp"
+#include "ringtrack/runner/run_input.hpp"
 #include "ringtrack/version.hpp"
 #include "stop_signals.hpp"
 
@@ -77,8 +74,7 @@ io::TimingRow timing_row(std::uint64_t scan, std::int64_t stamp_ns, const pipeli
 
 // Whether the odometry estimates the poses: --odometry on, or auto for a recording (pcap, bag,
 // stream) without --poses. Folders without poses keep the documented static sensor under auto.
-bool use_odometry(const std::string& mode, const std::string& input, const std::string& format,
-                  const std::string& poses) {
+bool use_odometry(const std::string& mode, bool folder, const std::string& poses) {
   if (mode == "off") return false;
   if (!poses.empty()) {
     if (mode == "on") {
@@ -87,8 +83,6 @@ bool use_odometry(const std::string& mode, const std::string& input, const std::
     return false;
   }
   if (mode == "on") return true;
-  const bool folder =
-      std::filesystem::is_directory(input) && format == "auto" && !io::is_rosbag2_path(input);
   return !folder;
 }
 
@@ -182,234 +176,18 @@ class FilteredScanWriter {
   std::uint64_t next_sequence_{0};
 };
 
-// Earliest and latest column stamps of a scan (its first and last column in firing order); equal
-// when it has no per-column times (all columns share one stamp, or none are set): then there is
-// no motion within the scan to compensate.
-std::pair<std::int64_t, std::int64_t> column_time_span(const core::OrganizedScan& scan) {
-  const auto& t = scan.column_stamp_ns;
-  if (t.size() != static_cast<std::size_t>(scan.columns()) || t.empty()) {
-    return {scan.stamp_ns, scan.stamp_ns};
-  }
-  const auto [first, last] = std::minmax_element(t.begin(), t.end());
-  return {*first, *last};
+// The run's input (runner::RunInput) from the command line: the input options, --poses,
+// --no-deskew and --on-bad-scan; Ctrl-C stops a live input.
+runner::RunInputOptions run_input_options(const RunOptions& o) {
+  runner::RunInputOptions options;
+  options.source = o.source.source_options();
+  options.source.velodyne.interrupt = &StopSignals::stop_flag();
+  options.poses = o.poses;
+  options.poses_format = o.poses_format;
+  options.no_deskew = o.no_deskew;
+  options.on_bad_scan = io::parse_bad_scan_policy(o.on_bad_scan);
+  return options;
 }
-
-// Scans with their poses, from a sequence folder / PCD folder or from a sensor recording or
-// stream, motion-compensated (pipeline::deskew_scan) whenever the sensor's motion is known
-// (docs/inputs.md, "Sensor poses and motion compensation").
-class RunInput {
- public:
-  /// Called for each scan that could not be read and was skipped: its number and the error.
-  using SkipHandler = std::function<void(std::uint64_t index, const std::string& error)>;
-
-  RunInput(const RunOptions& o, bool odometry, bool odometry_deskew, SkipHandler on_skip)
-      : odometry_(odometry),
-        policy_(io::parse_bad_scan_policy(o.on_bad_scan)),
-        on_skip_(std::move(on_skip)) {
-    open(o);
-    if (!odometry_) return;
-    // The odometry estimates the poses and compensates the motion with its own velocity.
-    deskew_ = false;
-    deskew_off_ = odometry_deskew ? "by the odometry (estimated velocity, from the second scan)"
-                                  : "off (odometry.deskew false)";
-  }
-
-  void open(const RunOptions& o) {
-    if (std::filesystem::is_directory(o.input) && !io::is_rosbag2_path(o.input) &&
-        o.source.format == "auto") {
-      io::SequenceReadOptions read_options;
-      read_options.scan_rate_hz = o.source.scan_rate_hz;  // plain folders without stamps
-      if (!o.poses.empty()) {
-        read_options.poses = o.poses;
-        read_options.poses_format =
-            o.poses_format == "kitti" ? io::PoseFileFormat::kKitti : io::PoseFileFormat::kTum;
-      }
-      if (!o.source.model.empty()) {
-        read_options.sensor = core::SensorModel::by_name(o.source.model);
-      }
-      sequence_ = std::make_unique<io::SequenceReader>(o.input, read_options);
-      if (sequence_->size() == 0) throw core::InputError(o.input + ": no scans found");
-      // A plain PCD folder's column times are the reader's guess (the files carry no time, and
-      // such clouds may be motion-compensated by whoever wrote them): nothing to deskew by.
-      if (o.no_deskew) {
-        deskew_off_ = "off (--no-deskew)";
-      } else if (!sequence_->has_poses()) {
-        deskew_off_ = "off (no poses: static sensor)";
-      } else if (!sequence_->is_sequence()) {
-        deskew_off_ = "off (plain PCD folder: its columns carry no times)";
-      } else if (sequence_->size() < 2) {
-        deskew_off_ = "off (one scan: its motion is unknown)";
-      } else {
-        deskew_ = true;
-        deskew_method_ = "poses of this and the next scan";
-      }
-      return;
-    }
-    io::ScanSourceOptions source_options = o.source.source_options();
-    source_options.velodyne.interrupt = &StopSignals::stop_flag();
-    source_ = io::open_scan_source(o.input, source_options);
-    reader_ = std::make_unique<io::ScanReader>(*source_, policy_, on_skip_);
-    if (!o.poses.empty()) {
-      if (o.poses_format != "tum") {
-        throw core::InputError(
-            o.poses + ": only TUM poses (with stamps) can be matched to a sensor recording");
-      }
-      trajectory_ = io::read_tum(o.poses);
-    }
-    if (o.no_deskew) {
-      deskew_off_ = "off (--no-deskew)";
-    } else if (trajectory_.empty()) {
-      deskew_off_ = "off (no --poses: static sensor)";
-    } else {
-      deskew_ = true;
-      deskew_method_ = "--poses at each scan's first and last column";
-    }
-  }
-
-  /// The next scan (motion-compensated when the sensor's motion is known) and the pose to process
-  /// it with; false at the end.
-  bool next(std::size_t& index, core::OrganizedScan& scan, core::Pose& pose) {
-    if (sequence_) {
-      if (!next_sequence_scan()) return false;
-      index = item_.index;
-      scan = std::move(item_.scan);
-      pose = item_.pose;
-      ++scans_;
-      if (odometry_) return true;
-      const auto [first_ns, last_ns] = column_time_span(scan);
-      if (deskew_ && last_ns > first_ns) {
-        // Motion between this scan's stamp and the next one's; the last scan extrapolates the
-        // motion between the previous scan and itself.
-        if (const auto a = deskew_pair(index)) {
-          pose = pipeline::deskew_scan(scan, sequence_->pose(*a), sequence_->pose(*a + 1));
-          ++deskewed_;
-        } else {
-          ++no_motion_;
-        }
-      }
-      return true;
-    }
-    std::uint64_t number = 0;
-    auto next_scan = reader_->next(number);
-    if (!next_scan) return false;
-    index = static_cast<std::size_t>(number);
-    scan = std::move(*next_scan);
-    pose = core::Pose{};
-    pose.stamp_ns = scan.stamp_ns;
-    ++scans_;
-    if (trajectory_.empty() || odometry_) return true;
-    if (!trajectory_.covers(scan.stamp_ns)) {
-      throw core::InputError("--poses: no pose around scan " + std::to_string(index) +
-                             " at stamp " + std::to_string(scan.stamp_ns) + " ns");
-    }
-    pose = trajectory_.at(scan.stamp_ns);
-    const auto [first_ns, last_ns] = column_time_span(scan);
-    if (!deskew_ || last_ns <= first_ns) return true;
-    if (!trajectory_.covers(first_ns) || !trajectory_.covers(last_ns)) {
-      throw core::InputError(
-          "--poses: no pose around scan " + std::to_string(index) + "'s columns (" +
-          io::format_stamp(first_ns) + " to " + io::format_stamp(last_ns) + " s; the poses cover " +
-          io::format_stamp(trajectory_.start_ns()) + " to " +
-          io::format_stamp(trajectory_.end_ns()) +
-          " s): motion compensation needs poses over the whole revolution (or give --no-deskew)");
-    }
-    pose = pipeline::deskew_scan(scan, trajectory_.at(first_ns), trajectory_.at(last_ns));
-    ++deskewed_;
-    return true;
-  }
-  /// Scans taken from the input so far, skipped ones included.
-  [[nodiscard]] std::uint64_t read() const {
-    return sequence_ ? sequence_attempts_ : reader_->read();
-  }
-  /// Scans skipped so far because they could not be read (--on-bad-scan skip).
-  [[nodiscard]] std::uint64_t unreadable() const {
-    return sequence_ ? sequence_skipped_ : reader_->skipped();
-  }
-  /// The sensor's height above the ground that a sequence folder states (simulated ones do).
-  [[nodiscard]] std::optional<double> stated_sensor_height() const {
-    return sequence_ ? sequence_->meta().sensor_height_m : std::nullopt;
-  }
-  /// The sensor that took the scans (for recordings known once the first scan was read).
-  [[nodiscard]] const core::SensorModel& sensor_model() const {
-    return sequence_ ? sequence_->sensor() : source_->model();
-  }
-  /// Number of scans when known in advance (0 for recordings and streams).
-  [[nodiscard]] std::size_t size() const { return sequence_ ? sequence_->size() : 0; }
-  /// What the source survived (e.g. a bag cut off), "" when nothing.
-  [[nodiscard]] std::string warning() const { return source_ ? source_->warning() : std::string(); }
-  /// What the source counted (packets, drops, ...), empty for sequence folders.
-  [[nodiscard]] std::string summary() const {
-    return source_ ? source_->summary() : sequence_->summary();
-  }
-  /// Where the poses came from, for the summary.
-  [[nodiscard]] std::string pose_summary(const RunOptions& o) const {
-    if (odometry_) {
-      return "odometry (--odometry " + o.odometry +
-             (o.odometry == "auto" ? ": a recording without --poses)" : ")");
-    }
-    if (!o.poses.empty()) return o.poses + " (--poses)";
-    if (sequence_ && sequence_->has_poses()) return "the sequence's poses.txt";
-    return "none: static sensor at the origin (--odometry on estimates them)";
-  }
-  /// Whether and how the scans were motion-compensated, for the summary.
-  [[nodiscard]] std::string deskew_summary() const {
-    if (!deskew_) return deskew_off_;
-    std::string out = std::to_string(deskewed_) + " of " + std::to_string(scans_) + " scans (" +
-                      deskew_method_ + ")";
-    if (const std::size_t untimed = scans_ - deskewed_ - no_motion_; untimed > 0) {
-      out += "; " + std::to_string(untimed) + " without per-column times left as they are";
-    }
-    if (no_motion_ > 0) {
-      out += "; " + std::to_string(no_motion_) +
-             " left as they are (no neighbouring scan with a later stamp: stamps going back)";
-    }
-    return out;
-  }
-
- private:
-  // The next scan of the folder into item_, passing over unreadable files under
-  // --on-bad-scan skip; false at the end.
-  bool next_sequence_scan() {
-    for (;;) {
-      if (sequence_attempts_ >= sequence_->size()) return false;
-      const std::uint64_t number = sequence_attempts_++;
-      try {
-        return sequence_->next(item_);
-      } catch (const core::InputError& e) {
-        if (policy_ == io::BadScanPolicy::kStop) throw;
-        ++sequence_skipped_;
-        if (on_skip_) on_skip_(number, e.what());
-      }
-    }
-  }
-
-  // The scans whose poses give scan i's motion: i and i + 1, or i - 1 and i for the last scan
-  // or when the stamps go back at i + 1 (a clock step: that scan is skipped); none when neither
-  // pair moves forward in time.
-  [[nodiscard]] std::optional<std::size_t> deskew_pair(std::size_t i) const {
-    const auto forward = [this](std::size_t a) {
-      return sequence_->pose(a + 1).stamp_ns > sequence_->pose(a).stamp_ns;
-    };
-    if (i + 1 < sequence_->size() && forward(i)) return i;
-    if (i > 0 && forward(i - 1)) return i - 1;
-    return std::nullopt;
-  }
-
-  bool odometry_{false};  // poses come from the odometry, not from the input
-  io::BadScanPolicy policy_;
-  SkipHandler on_skip_;
-  std::unique_ptr<io::SequenceReader> sequence_;
-  std::uint64_t sequence_attempts_{0}, sequence_skipped_{0};
-  std::unique_ptr<io::ScanSource> source_;
-  std::unique_ptr<io::ScanReader> reader_;
-  io::Trajectory trajectory_;
-  io::SequenceScan item_;
-  bool deskew_{false};         // compensate scans that have per-column times
-  std::string deskew_method_;  // where the motion comes from (deskew_)
-  std::string deskew_off_;     // why not (!deskew_)
-  std::size_t scans_{0}, deskewed_{0};
-  std::size_t no_motion_{0};  // sequence scans without a forward-moving pose pair
-};
 
 // The MCAP sink (--mcap) with the run's metadata: what wrote it, from what, with which config.
 std::unique_ptr<io::FoxgloveSink> open_mcap(const RunOptions& o, const core::Config& config) {
@@ -549,7 +327,7 @@ void warn_about_heights(const core::Config& config, std::uint64_t too_high,
 
 // The run proper, once the output folder and its run.json exist; keeps `status` up to date.
 void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunStatus& status,
-              SkipWarnings& warnings, RunInput& input) {
+              SkipWarnings& warnings, runner::RunInput& input) {
   const fs::path out = o.out;
   std::error_code ec;
   if (o.filtered_scans) fs::create_directories(out / "filtered", ec);
@@ -679,7 +457,7 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
       signal.empty()
           ? ""
           : (" (interrupted by " + signal + ": the outputs cover these scans only)").c_str());
-  std::printf("poses            %s\n", input.pose_summary(o).c_str());
+  std::printf("poses            %s\n", input.pose_summary(o.odometry).c_str());
   if (!origin.isZero()) {
     std::printf(
         "frame            tracks.csv and poses.txt in the poses' frame; maps%s in the local frame "
@@ -725,18 +503,21 @@ void run_into(const RunOptions& o, core::Config& config, bool odometry, io::RunS
 void run(const RunOptions& o) {
   // For the whole command: a signal while the maps are written still lets them finish.
   const StopSignals stop_signals;
-  const bool odometry = use_odometry(o.odometry, o.input, o.source.format, o.poses);
+  // The two pose sources are checked before the configuration and the input are read.
+  if (o.odometry == "on" && !o.poses.empty()) (void)use_odometry(o.odometry, false, o.poses);
   core::Config config = o.config.load();
-  if (odometry && o.no_deskew) config.odometry.deskew = false;
   io::RunStatusFile status_file(fs::path(o.out) / "run.json", new_run_status("run", o.input));
   io::RunStatus& status = status_file.status();
   SkipWarnings warnings(o.input);
-  RunInput input(o, odometry, config.odometry.deskew,
-                 [&status, &warnings](std::uint64_t index, const std::string& error) {
-                   ++status.scans_skipped_unreadable;
-                   status.add_skipped(index, "unreadable: " + error);
-                   warnings.warn(index, "unreadable, skipped: " + error);
-                 });
+  runner::RunInput input(o.input, run_input_options(o),
+                         [&status, &warnings](std::uint64_t index, const std::string& error) {
+                           ++status.scans_skipped_unreadable;
+                           status.add_skipped(index, "unreadable: " + error);
+                           warnings.warn(index, "unreadable, skipped: " + error);
+                         });
+  const bool odometry = use_odometry(o.odometry, input.folder(), o.poses);
+  if (odometry && o.no_deskew) config.odometry.deskew = false;
+  if (odometry) input.use_odometry(config.odometry.deskew);
   // A simulated sequence knows how high its sensor stands; the user's configuration wins.
   const auto height = input.stated_sensor_height();
   if (height && !o.config.sets("detection.sensor_height_m")) {

@@ -1,5 +1,5 @@
 // Recordings as Python iterators of scans: packet captures, bags and live UDP through
-// io::open_scan_source, sequence and PCD folders through io::SequenceReader.
+// io::open_source, sequence and PCD folders through io::SequenceReader.
 
 #include <memory>
 #include <optional>
@@ -18,7 +18,7 @@ namespace {
 class SourceIterator {
  public:
   SourceIterator(const std::string& input, const io::ScanSourceOptions& options)
-      : source_(io::open_scan_source(input, options)) {}
+      : source_(io::open_source(input, options)) {}
   core::OrganizedScan next() {
     std::optional<core::OrganizedScan> scan;
     {
@@ -65,7 +65,6 @@ io::ScanSourceOptions source_options(const std::string& format, const std::strin
   io::ScanSourceOptions o;
   o.format = io::parse_scan_input_format(format);
   o.topic = topic;
-  o.velodyne.topic = topic;
   o.velodyne.decoder.model = sensor;
   o.velodyne.decoder.scan_rate_hz = scan_rate_hz;
   o.calibration = calibration;

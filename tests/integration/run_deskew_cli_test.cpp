@@ -241,7 +241,7 @@ Capture write_capture(const fs::path& dir) {
   test::write_pcap(c.pcap, test::PcapLink::kEthernet,
                    test::frame_packets(test::PcapLink::kEthernet, packets));
   const io::ScanSourceOptions options;  // run's defaults
-  const auto source = io::open_scan_source(c.pcap, options);
+  const auto source = io::open_source(c.pcap, options);
   while (auto scan = source->next()) c.scans.push_back(std::move(*scan));
   return c;
 }

@@ -3,21 +3,8 @@
 #include <utility>
 
 #include "ringtrack/core/error.hpp"
-#include "ringtrack/io/rosbag_source.hpp"
 
 namespace ringtrack::io {
-namespace {
-
-// Messages a source has taken from its container; nullopt for sources that cannot tell, which
-// are never read past an error.
-std::optional<std::uint64_t> messages_taken(const ScanSource& source) {
-  if (const auto* bag = dynamic_cast<const RosbagScanSource*>(&source)) {
-    return bag->stats().messages;
-  }
-  return std::nullopt;
-}
-
-}  // namespace
 
 BadScanPolicy parse_bad_scan_policy(const std::string& name) {
   if (name == "skip") return BadScanPolicy::kSkip;
@@ -30,15 +17,16 @@ ScanReader::ScanReader(ScanSource& source, BadScanPolicy policy, SkipHandler on_
 
 std::optional<core::OrganizedScan> ScanReader::next(std::uint64_t& index) {
   for (;;) {
-    const auto before = messages_taken(source_);
+    const auto before = source_.items_taken();
     try {
       auto scan = source_.next();
       if (scan) index = next_index_++;
       return scan;
     } catch (const core::InputError& e) {
-      // Skippable only when the failing message was taken (the bag source counts a message
-      // before decoding it), so the next call starts at the message after it.
-      const auto after = messages_taken(source_);
+      // Skippable only when the failing message or file was taken (bag sources count a message
+      // before decoding it, folder sources a file before reading it), so the next call starts
+      // at the one after it.
+      const auto after = source_.items_taken();
       if (policy_ == BadScanPolicy::kStop || !before || !after || *after <= *before) {
         ++next_index_;  // the scan that stops the reading was taken too
         throw;

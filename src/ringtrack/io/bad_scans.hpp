@@ -9,7 +9,7 @@
 #include <string>
 
 #include "ringtrack/core/organized_scan.hpp"
-#include "ringtrack/io/scan_source.hpp"
+#include "ringtrack/io/source.hpp"
 
 namespace ringtrack::io {
 

@@ -9,13 +9,13 @@
 
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/io/pcap_reader.hpp"
-#include "ringtrack/io/velodyne_source.hpp"
+#include "ringtrack/io/source.hpp"
 #include "ringtrack/sensors/hesai/hesai_decoder.hpp"
 
 namespace ringtrack::io {
 
 /// Reads a capture and yields one OrganizedScan per revolution.
-class HesaiPcapSource final : public VelodyneScanSource {
+class HesaiPcapSource final : public ScanSource {
  public:
   /// Opens the capture; throws core::InputError (file) or core::ConfigError (options).
   HesaiPcapSource(const std::filesystem::path& path, std::uint16_t data_port,
@@ -24,6 +24,10 @@ class HesaiPcapSource final : public VelodyneScanSource {
   std::optional<core::OrganizedScan> next() override;
   /// The sensor model (known after the first packet).
   [[nodiscard]] const core::SensorModel& model() const override { return decoder_.model(); }
+  /// The capture's name and kind.
+  [[nodiscard]] std::string description() const override {
+    return reader_.path() + " (Hesai pcap)";
+  }
   /// One line of counters.
   [[nodiscard]] std::string summary() const override;
   /// The decoder.

@@ -9,14 +9,14 @@
 
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/io/pcap_reader.hpp"
-#include "ringtrack/io/velodyne_source.hpp"
+#include "ringtrack/io/source.hpp"
 #include "ringtrack/sensors/ouster/ouster_decoder.hpp"
 
 namespace ringtrack::io {
 
 /// Reads a capture: lidar packets to `lidar_port` (7502) are decoded, IMU packets (7503) and
 /// other traffic counted and ignored.
-class OusterPcapSource final : public VelodyneScanSource {
+class OusterPcapSource final : public ScanSource {
  public:
   /// Opens the capture; throws core::InputError.
   OusterPcapSource(const std::filesystem::path& path, sensors::ouster::OusterMetadata metadata,
@@ -26,6 +26,10 @@ class OusterPcapSource final : public VelodyneScanSource {
   std::optional<core::OrganizedScan> next() override;
   /// The sensor model.
   [[nodiscard]] const core::SensorModel& model() const override { return decoder_.model(); }
+  /// The capture's name and kind.
+  [[nodiscard]] std::string description() const override {
+    return reader_.path() + " (Ouster pcap)";
+  }
   /// One line of counters.
   [[nodiscard]] std::string summary() const override;
   /// The decoder.

@@ -216,6 +216,10 @@ const core::SensorModel& RosbagScanSource::model() const {
   return packets_topic_ ? decoder_.model() : organizer_.model();
 }
 
+std::string RosbagScanSource::description() const {
+  return reader_->path().string() + " (ROS bag, topic " + topic_.name + ")";
+}
+
 std::string RosbagScanSource::summary() const {
   std::string line =
       std::to_string(stats_.messages) + " messages of " + topic_.name + " (" + topic_.type + ")";

@@ -14,8 +14,8 @@
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/io/pointcloud2.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
+#include "ringtrack/io/source.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
-#include "ringtrack/io/velodyne_source.hpp"
 #include "ringtrack/sensors/hesai/hesai_decoder.hpp"
 
 namespace ringtrack::io {
@@ -71,7 +71,7 @@ struct RosbagSourceStats {
 
 /// Reads one topic of a ROS 1 or ROS 2 bag and yields one OrganizedScan per revolution
 /// (VelodyneScan: the decoder's scans; PointCloud2: one scan per cloud).
-class RosbagScanSource final : public VelodyneScanSource {
+class RosbagScanSource final : public ScanSource {
  public:
   /// Opens a bag (open_rosbag) and chooses the topic; throws core::InputError when the bag or
   /// the topic's type is unusable, core::ConfigError for an unknown topic or bad options.
@@ -84,10 +84,16 @@ class RosbagScanSource final : public VelodyneScanSource {
   std::optional<core::OrganizedScan> next() override;
   /// The sensor model (known after the first scan).
   [[nodiscard]] const core::SensorModel& model() const override;
+  /// The bag's name and the topic read.
+  [[nodiscard]] std::string description() const override;
   /// One line of counters.
   [[nodiscard]] std::string summary() const override;
   /// The bag reader's warning (e.g. an MCAP file cut off).
   [[nodiscard]] std::string warning() const override { return reader_->warning(); }
+  /// Messages taken from the topic (counted before decoding, so a bad one can be read past).
+  [[nodiscard]] std::optional<std::uint64_t> items_taken() const override {
+    return stats_.messages;
+  }
 
   /// The chosen topic.
   [[nodiscard]] const RosbagTopicInfo& topic() const { return topic_; }

@@ -1,6 +1,6 @@
 #include "ringtrack/io/scan_source.hpp"
 
-#include <cctype>
+#include <cmath>
 #include <filesystem>
 
 #include "ringtrack/core/error.hpp"
@@ -11,7 +11,7 @@
 #include "ringtrack/io/rosbag2_reader.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
 #include "ringtrack/io/rosbag_source.hpp"
-#include "ringtrack/io/sequence.hpp"
+#include "ringtrack/io/sequence_source.hpp"
 #include "ringtrack/sensors/hesai/hesai_calibration.hpp"
 #include "ringtrack/sensors/hesai/hesai_format.hpp"
 
@@ -34,23 +34,6 @@ ScanInputFormat parse_scan_input_format(const std::string& name) {
                           "': expected auto, pcap, udp, bag (ROS 1), rosbag2, mcap or folder");
 }
 
-namespace {
-
-// A sequence folder, or a folder holding at least one .pcd or .bin file.
-bool is_scan_folder(const fs::path& path) {
-  std::error_code ec;
-  if (!fs::is_directory(path, ec)) return false;
-  if (fs::exists(path / "sequence.yaml", ec)) return true;
-  for (const auto& entry : fs::directory_iterator(path, ec)) {
-    std::string ext = entry.path().extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if ((ext == ".pcd" || ext == ".bin") && entry.is_regular_file(ec)) return true;
-  }
-  return false;
-}
-
-}  // namespace
-
 ScanInputFormat guess_scan_input_format(const std::string& input) {
   if (input.rfind("udp://", 0) == 0) return ScanInputFormat::kUdp;
   const fs::path path(input);
@@ -61,7 +44,9 @@ ScanInputFormat guess_scan_input_format(const std::string& input) {
   if (is_rosbag1_file(path) || ext == ".bag") return ScanInputFormat::kRosbag1;
   if (is_mcap_bag(path)) return ScanInputFormat::kRosbag2;  // by its magic, whatever the name
   if (is_rosbag2_path(path)) return ScanInputFormat::kRosbag2;
-  if (is_scan_folder(path)) return ScanInputFormat::kFolder;
+  // Any other folder: the folder reader says best what it lacks (an incomplete sequence, no
+  // scan files, both .pcd and .bin files).
+  if (fs::is_directory(path, ec)) return ScanInputFormat::kFolder;
   throw core::InputError(input +
                          ": cannot tell the input format (expected udp://HOST:PORT, a .pcap/"
                          ".pcapng file, a ROS 1 .bag file, a rosbag2 folder or a folder of "
@@ -96,100 +81,118 @@ sensors::hesai::HesaiDecoderOptions hesai_options(const ScanSourceOptions& optio
   return h;
 }
 
-// A folder of scan files as a stream of scans (stamps from its stamps.txt or the scan rate).
-class FolderScanSource : public ScanSource {
- public:
-  FolderScanSource(const std::string& input, SequenceReadOptions options)
-      : reader_(input, std::move(options)) {}
-  std::optional<core::OrganizedScan> next() override {
-    SequenceScan item;
-    if (!reader_.next(item)) return std::nullopt;
-    return std::move(item.scan);
+// A capture: Ouster when its metadata is given, Hesai when named or recognised (its angle
+// corrections are required), Velodyne otherwise.
+std::unique_ptr<ScanSource> open_pcap(const std::string& input, const ScanSourceOptions& options) {
+  if (!options.metadata.empty()) {
+    return std::make_unique<OusterPcapSource>(
+        input, sensors::ouster::read_ouster_metadata(options.metadata));
   }
-  [[nodiscard]] const core::SensorModel& model() const override { return reader_.sensor(); }
-  [[nodiscard]] std::string summary() const override {
-    std::string line = std::to_string(reader_.size()) + " scan files";
-    if (const auto organized = reader_.summary(); !organized.empty()) line += "; " + organized;
-    return line;
+  if (pcap_holds_ouster(input)) {
+    throw core::InputError(input +
+                           ": Ouster lidar packets (port 7502); give the sensor's metadata "
+                           "JSON with --metadata FILE");
   }
+  if (is_hesai_model_name(options.velodyne.decoder.model) ||
+      pcap_holds_hesai(input, options.velodyne.pcap.data_port)) {
+    if (options.calibration.empty()) {
+      throw core::InputError(input +
+                             ": Hesai packets; give the sensor's angle-correction file with "
+                             "--calibration FILE");
+    }
+    auto h = hesai_options(options);
+    h.calibration = sensors::hesai::read_hesai_calibration(options.calibration);
+    return std::make_unique<HesaiPcapSource>(input, options.velodyne.pcap.data_port, std::move(h),
+                                             options.velodyne.pcap.allow_truncated);
+  }
+  return open_velodyne_pcap_source(input, options.velodyne);
+}
 
- private:
-  SequenceReader reader_;
-};
+// A bag of either ROS version; the decoder options serve its packets, the cloud options its
+// PointCloud2 topics.
+std::unique_ptr<ScanSource> open_bag(const std::string& input, ScanInputFormat format,
+                                     const ScanSourceOptions& options) {
+  RosbagSourceOptions b;
+  b.topic = options.topic;
+  b.decoder = options.velodyne.decoder;
+  if (is_hesai_model_name(b.decoder.model)) b.decoder.model.clear();
+  b.hesai = hesai_options(options);
+  b.calibration_path = options.calibration;
+  b.cloud.model = is_hesai_model_name(options.velodyne.decoder.model)
+                      ? std::string()
+                      : options.velodyne.decoder.model;
+  b.cloud.scan_rate_hz = options.velodyne.decoder.scan_rate_hz;
+  b.cloud.cut_azimuth_deg = options.velodyne.decoder.cut_azimuth_deg;
+  b.cloud.ring_field = options.ring_field;
+  std::unique_ptr<RosbagReader> reader;
+  if (format == ScanInputFormat::kRosbag1) {
+    reader = std::make_unique<Rosbag1Reader>(input);
+  } else if (is_mcap_bag(input)) {
+    reader = std::make_unique<McapBagReader>(input);
+  } else {
+    reader = std::make_unique<Rosbag2Reader>(input);
+  }
+  return std::make_unique<RosbagScanSource>(std::move(reader), std::move(b));
+}
+
+// A folder of scan files with its poses (or the poses file given in their place).
+std::unique_ptr<ScanSource> open_folder(const std::string& input,
+                                        const ScanSourceOptions& options) {
+  SequenceReadOptions f;
+  f.scan_rate_hz = options.velodyne.decoder.scan_rate_hz;  // plain folders without stamps
+  if (!options.velodyne.decoder.model.empty()) {
+    f.sensor = core::SensorModel::by_name(options.velodyne.decoder.model, f.scan_rate_hz);
+  }
+  f.poses = options.poses;
+  f.poses_format = options.poses_format;
+  return std::make_unique<SequenceSource>(input, std::move(f));
+}
 
 }  // namespace
 
-std::unique_ptr<ScanSource> open_scan_source(const std::string& input,
-                                             const ScanSourceOptions& options) {
+void ScanSourceOptions::validate() const {
+  const double rate = velodyne.decoder.scan_rate_hz;
+  if (!std::isfinite(rate) || rate <= 0.0) {
+    throw core::ConfigError("scan rate " + std::to_string(rate) +
+                            " Hz: expected a positive number of revolutions per second");
+  }
+  if (velodyne.pcap.data_port == 0) throw core::ConfigError("data port 0: expected 1..65535");
+  if (velodyne.udp_max_queued_scans == 0) {
+    throw core::ConfigError("udp_max_queued_scans 0: expected at least one queued scan");
+  }
+  if (ring_field.empty()) {
+    throw core::ConfigError("ring field '': expected the name of a PointCloud2 field (ring)");
+  }
+  if (!calibration.empty() && !metadata.empty()) {
+    throw core::ConfigError(
+        "calibration (Hesai) and metadata (Ouster) given together: expected the one file of "
+        "the sensor that recorded the input");
+  }
+}
+
+std::unique_ptr<ScanSource> open_source(const std::string& uri, const ScanSourceOptions& options) {
+  options.validate();
   const ScanInputFormat format =
-      options.format == ScanInputFormat::kAuto ? guess_scan_input_format(input) : options.format;
+      options.format == ScanInputFormat::kAuto ? guess_scan_input_format(uri) : options.format;
+  if (format != ScanInputFormat::kFolder && !options.poses.empty()) {
+    throw core::ConfigError("poses " + options.poses.string() + ": " + uri +
+                            " is not a folder; recordings carry no poses (match a TUM "
+                            "trajectory to their stamps)");
+  }
   switch (format) {
     case ScanInputFormat::kPcap:
-      if (!options.metadata.empty()) {
-        return std::make_unique<OusterPcapSource>(
-            input, sensors::ouster::read_ouster_metadata(options.metadata));
-      }
-      if (pcap_holds_ouster(input)) {
-        throw core::InputError(input +
-                               ": Ouster lidar packets (port 7502); give the sensor's metadata "
-                               "JSON with --metadata FILE");
-      }
-      if (is_hesai_model_name(options.velodyne.decoder.model) ||
-          pcap_holds_hesai(input, options.velodyne.pcap.data_port)) {
-        if (options.calibration.empty()) {
-          throw core::InputError(input +
-                                 ": Hesai packets; give the sensor's angle-correction file with "
-                                 "--calibration FILE");
-        }
-        auto h = hesai_options(options);
-        h.calibration = sensors::hesai::read_hesai_calibration(options.calibration);
-        return std::make_unique<HesaiPcapSource>(input, options.velodyne.pcap.data_port,
-                                                 std::move(h),
-                                                 options.velodyne.pcap.allow_truncated);
-      }
-      [[fallthrough]];
-    case ScanInputFormat::kUdp: {
-      VelodyneSourceOptions v = options.velodyne;
-      v.format =
-          format == ScanInputFormat::kPcap ? VelodyneInputFormat::kPcap : VelodyneInputFormat::kUdp;
-      return open_velodyne_source(input, v);
-    }
+      return open_pcap(uri, options);
+    case ScanInputFormat::kUdp:
+      return open_velodyne_udp_source(uri, options.velodyne);
     case ScanInputFormat::kRosbag1:
-    case ScanInputFormat::kRosbag2: {
-      RosbagSourceOptions b;
-      b.topic = options.topic;
-      b.decoder = options.velodyne.decoder;
-      if (is_hesai_model_name(b.decoder.model)) b.decoder.model.clear();
-      b.hesai = hesai_options(options);
-      b.calibration_path = options.calibration;
-      b.cloud.model = is_hesai_model_name(options.velodyne.decoder.model)
-                          ? std::string()
-                          : options.velodyne.decoder.model;
-      b.cloud.scan_rate_hz = options.velodyne.decoder.scan_rate_hz;
-      b.cloud.cut_azimuth_deg = options.velodyne.decoder.cut_azimuth_deg;
-      b.cloud.ring_field = options.ring_field;
-      std::unique_ptr<RosbagReader> reader;
-      if (format == ScanInputFormat::kRosbag1) {
-        reader = std::make_unique<Rosbag1Reader>(input);
-      } else if (is_mcap_bag(input)) {
-        reader = std::make_unique<McapBagReader>(input);
-      } else {
-        reader = std::make_unique<Rosbag2Reader>(input);
-      }
-      return std::make_unique<RosbagScanSource>(std::move(reader), std::move(b));
-    }
-    case ScanInputFormat::kFolder: {
-      SequenceReadOptions f;
-      f.scan_rate_hz = options.velodyne.decoder.scan_rate_hz;
-      if (!options.velodyne.decoder.model.empty()) {
-        f.sensor = core::SensorModel::by_name(options.velodyne.decoder.model, f.scan_rate_hz);
-      }
-      return std::make_unique<FolderScanSource>(input, std::move(f));
-    }
+    case ScanInputFormat::kRosbag2:
+      return open_bag(uri, format, options);
+    case ScanInputFormat::kFolder:
+      return open_folder(uri, options);
     case ScanInputFormat::kAuto:
       break;
   }
-  throw core::InputError(input + ": cannot tell the input format");
+  throw core::InputError(uri + ": cannot tell the input format");
 }
 
 }  // namespace ringtrack::io

@@ -66,8 +66,8 @@ TEST(HesaiSources, PcapGivesTheBagsScans) {
     EXPECT_TRUE(pcap_holds_hesai(pcap, 2368));
     ScanSourceOptions options;
     options.calibration = (dir / (model + ".csv")).string();
-    auto from_pcap = open_scan_source(pcap.string(), options);
-    auto from_bag = open_scan_source((dir / "ros2_bag").string(), options);
+    auto from_pcap = open_source(pcap.string(), options);
+    auto from_bag = open_source((dir / "ros2_bag").string(), options);
     std::size_t scans = 0;
     while (auto a = from_pcap->next()) {
       auto b = from_bag->next();
@@ -86,7 +86,7 @@ TEST(HesaiSources, NoCalibrationIsOneClearError) {
   const fs::path dir = model_dir("PandarXT16");
   REQUIRE_HESAI(dir);
   ScanSourceOptions options;
-  EXPECT_EQ(test::input_error([&] { open_scan_source((dir / "ros2_bag").string(), options); }),
+  EXPECT_EQ(test::input_error([&] { open_source((dir / "ros2_bag").string(), options); }),
             (dir / "ros2_bag").string() +
                 ": topic /pandar_packets holds Hesai packets; give the sensor's angle-correction "
                 "file with --calibration FILE");

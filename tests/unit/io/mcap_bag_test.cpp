@@ -104,7 +104,7 @@ class McapBag : public ::testing::Test {
   void SetUp() override { dir_ = data_dir(); }
   std::vector<core::OrganizedScan> sqlite_scans() {
     const ScanSourceOptions options;
-    auto source = open_scan_source((dir_ / "ros2_bag").string(), options);
+    auto source = open_source((dir_ / "ros2_bag").string(), options);
     return all_scans(*source);
   }
   fs::path dir_;
@@ -127,7 +127,7 @@ TEST_F(McapBag, EveryLayoutGivesTheScansOfTheSqliteBag) {
     write_mcap(tmp / "bag.dump", file, options);
     EXPECT_TRUE(is_mcap_bag(file));
     EXPECT_EQ(guess_scan_input_format(file.string()), ScanInputFormat::kRosbag2);
-    auto source = open_scan_source(file.string(), defaults_);
+    auto source = open_source(file.string(), defaults_);
     const auto scans = all_scans(*source);
     ASSERT_EQ(scans.size(), expected.size()) << name;
     for (std::size_t k = 0; k < scans.size(); ++k) {
@@ -146,7 +146,7 @@ TEST_F(McapBag, EveryLayoutGivesTheScansOfTheSqliteBag) {
                    "  relative_file_paths:\n    - folder_0.mcap\n  compression_format: \"\"\n"
                    "  compression_mode: \"\"\n");
   EXPECT_TRUE(is_mcap_bag(tmp / "folder"));
-  auto folder = open_scan_source((tmp / "folder").string(), defaults_);
+  auto folder = open_source((tmp / "folder").string(), defaults_);
   EXPECT_EQ(all_scans(*folder).size(), expected.size());
 
   // A listed path the system refuses to look up (longer than NAME_MAX) is a missing file, not a
@@ -173,7 +173,7 @@ TEST_F(McapBag, ACutOffBagGivesTheScansBeforeTheCutAndAWarning) {
   const auto full = fs::file_size(tmp / "full.mcap");
   fs::copy_file(tmp / "full.mcap", tmp / "cut.mcap");
   fs::resize_file(tmp / "cut.mcap", full * 9 / 10);
-  auto source = open_scan_source((tmp / "cut.mcap").string(), defaults_);
+  auto source = open_source((tmp / "cut.mcap").string(), defaults_);
   const auto scans = all_scans(*source);
   ASSERT_GE(scans.size(), 1u);
   ASSERT_LT(scans.size(), expected.size());
@@ -230,12 +230,12 @@ TEST_F(McapBag, BagsCompressedByRosbag2GiveThePlainScans) {
   write_bag(tmp / "plain", false, "");
   write_bag(tmp / "file", false, "FILE");
   write_bag(tmp / "message", true, "MESSAGE");
-  auto plain_source = open_scan_source((tmp / "plain").string(), defaults_);
+  auto plain_source = open_source((tmp / "plain").string(), defaults_);
   const auto expected = all_scans(*plain_source);
   ASSERT_GE(expected.size(), 3u);
   for (const std::string name : {"file", "message"}) {
     EXPECT_TRUE(is_mcap_bag(tmp / name)) << name;
-    auto source = open_scan_source((tmp / name).string(), defaults_);
+    auto source = open_source((tmp / name).string(), defaults_);
     const auto scans = all_scans(*source);
     ASSERT_EQ(scans.size(), expected.size()) << name;
     for (std::size_t k = 0; k < scans.size(); ++k) {
@@ -249,7 +249,7 @@ TEST_F(McapBag, BagsCompressedByRosbag2GiveThePlainScans) {
                    "  relative_file_paths: [../plain/plain_0.mcap]\n"
                    "  compression_format: zstd\n  compression_mode: MESSAGE\n");
   try {
-    auto source = open_scan_source((tmp / "message").string(), defaults_);
+    auto source = open_source((tmp / "message").string(), defaults_);
     all_scans(*source);
     ADD_FAILURE() << "a plain payload was taken for a zstd frame";
   } catch (const core::InputError& e) {
@@ -269,7 +269,7 @@ TEST_F(McapBag, ACorruptChunkIsAnErrorNamingItsOffset) {
   bytes[bytes.size() / 2] = static_cast<char>(bytes[bytes.size() / 2] ^ 0x10);
   test::write_text(tmp / "bad.mcap", bytes);
   try {
-    auto source = open_scan_source((tmp / "bad.mcap").string(), defaults_);
+    auto source = open_source((tmp / "bad.mcap").string(), defaults_);
     all_scans(*source);
     ADD_FAILURE() << "no error";
   } catch (const core::InputError& e) {

@@ -238,12 +238,12 @@ TEST(Rosbag1, VelodyneScanBagsDecodeLikeThePackets) {
       EXPECT_EQ(source.model().name, "VLP-16");
     }
   }
-  // open_scan_source guesses the format from the contents, whatever the name.
+  // open_source guesses the format from the contents, whatever the name.
   const fs::path renamed = dir.path() / "recording.data";
   fs::copy_file(dir.path() / "v_lz4_i.bag", renamed);
   EXPECT_EQ(guess_scan_input_format(renamed.string()), ScanInputFormat::kRosbag1);
   const ScanSourceOptions defaults;
-  auto source = open_scan_source(renamed.string(), defaults);
+  auto source = open_source(renamed.string(), defaults);
   expect_same_scans(*source, expected);
 }
 
@@ -525,9 +525,9 @@ TEST(Rosbag1, SameScansAsTheRos2BagOfTheSamePackets) {
   test::write_rosbag2(dir.path() / "b", {{"/velodyne_packets", "velodyne_msgs/msg/VelodyneScan"}},
                       test::velodyne_scan_messages(ps, 0, test::RosEncoding::kCdr));
   const ScanSourceOptions defaults;
-  auto a = open_scan_source((dir.path() / "a.bag").string(), defaults);
+  auto a = open_source((dir.path() / "a.bag").string(), defaults);
   std::vector<core::OrganizedScan> from_ros2;
-  auto b = open_scan_source((dir.path() / "b").string(), defaults);
+  auto b = open_source((dir.path() / "b").string(), defaults);
   while (auto s = b->next()) from_ros2.push_back(std::move(*s));
   ASSERT_EQ(from_ros2.size(), 2u);
   expect_same_scans(*a, from_ros2);

@@ -20,7 +20,6 @@
 #include "ringtrack/io/scan_source.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/io/velodyne_pcap_source.hpp"
-#include "ringtrack/io/velodyne_source.hpp"
 #include "support/rosbag_writers.hpp"
 #include "support/temp_dir.hpp"
 #include "support/velodyne_encoder.hpp"
@@ -28,6 +27,9 @@
 
 namespace ringtrack::io {
 namespace {
+
+// Default options, named: a braced temporary trips g++ 12's -Wmaybe-uninitialized.
+const ScanSourceOptions kDefaults;
 
 namespace fs = std::filesystem;
 constexpr double kRadToDeg = 180.0 / std::numbers::pi;
@@ -80,7 +82,7 @@ TEST(Rosbag2, RealBagGivesThePcapScansCellForCell) {
        {VelodyneReturnSelection::kLast, VelodyneReturnSelection::kStrongest}) {
     ScanSourceOptions options;
     options.velodyne.decoder.return_selection = selection;
-    auto bag = open_scan_source((dir / "ros2_bag").string(), options);
+    auto bag = open_source((dir / "ros2_bag").string(), options);
     EXPECT_EQ(guess_scan_input_format((dir / "ros2_bag").string()), ScanInputFormat::kRosbag2);
     VelodynePcapSource pcap(dir / "vlp16_dual_4scans.pcap", {}, options.velodyne.decoder);
     std::vector<core::OrganizedScan> expected;
@@ -338,17 +340,16 @@ TEST(Rosbag2, SeveralVelodyneTopicsAndTheVelodyneSourceFactory) {
       },
       {"two", "no decodable Velodyne data packets on /a"});
 
-  // open_velodyne_source reads ROS 2 bags through the same bag source.
-  EXPECT_EQ(parse_velodyne_input_format("rosbag2"), VelodyneInputFormat::kRosbag2);
-  EXPECT_EQ(parse_velodyne_input_format("bag2"), VelodyneInputFormat::kRosbag2);
-  EXPECT_EQ(parse_velodyne_input_format("ros2"), VelodyneInputFormat::kRosbag2);
-  EXPECT_EQ(guess_velodyne_input_format(bag.string()), VelodyneInputFormat::kRosbag2);
-  EXPECT_EQ(guess_velodyne_input_format((bag / "two_0.db3").string()),
-            VelodyneInputFormat::kRosbag2);
-  for (const auto format : {VelodyneInputFormat::kRosbag2, VelodyneInputFormat::kAuto}) {
-    VelodyneSourceOptions v;
-    v.format = format;
-    auto source = open_velodyne_source(bag.string(), v);
+  // open_source reads ROS 2 bags through the same bag source, named or guessed.
+  EXPECT_EQ(parse_scan_input_format("rosbag2"), ScanInputFormat::kRosbag2);
+  EXPECT_EQ(parse_scan_input_format("bag2"), ScanInputFormat::kRosbag2);
+  EXPECT_EQ(parse_scan_input_format("ros2"), ScanInputFormat::kRosbag2);
+  EXPECT_EQ(guess_scan_input_format(bag.string()), ScanInputFormat::kRosbag2);
+  EXPECT_EQ(guess_scan_input_format((bag / "two_0.db3").string()), ScanInputFormat::kRosbag2);
+  for (const auto format : {ScanInputFormat::kRosbag2, ScanInputFormat::kAuto}) {
+    ScanSourceOptions o;
+    o.format = format;
+    auto source = open_source(bag.string(), o);
     expect_same_scans(*source, expected);
     EXPECT_EQ(source->model().name, "VLP-16");
     EXPECT_NE(source->summary().find(std::to_string(scan_messages(ps, 1).size()) +
@@ -357,17 +358,18 @@ TEST(Rosbag2, SeveralVelodyneTopicsAndTheVelodyneSourceFactory) {
                                      std::to_string(expected.size()) + " scans"),
               std::string::npos)
         << source->summary();
+    EXPECT_EQ(source->description(), bag.string() + " (ROS bag, topic /b)");
+    EXPECT_FALSE(source->pose());  // bags carry no poses
   }
-  VelodyneSourceOptions v;
-  v.format = VelodyneInputFormat::kRosbag2;
-  v.topic = "/a";
-  expect_input_error([&] { open_velodyne_source(bag.string(), v)->next(); },
+  ScanSourceOptions o;
+  o.format = ScanInputFormat::kRosbag2;
+  o.topic = "/a";
+  expect_input_error([&] { open_source(bag.string(), o)->next(); },
                      {"no decodable Velodyne data packets on /a"});
-  v.topic = "/nope";
-  EXPECT_THROW(open_velodyne_source(bag.string(), v), core::ConfigError);
-  v.topic.clear();
-  expect_input_error([&] { open_velodyne_source((dir / "missing.db3").string(), v); },
-                     {"missing.db3"});
+  o.topic = "/nope";
+  EXPECT_THROW(open_source(bag.string(), o), core::ConfigError);
+  o.topic.clear();
+  expect_input_error([&] { open_source((dir / "missing.db3").string(), o); }, {"missing.db3"});
 }
 
 // Both serializations carry the same packets; DDS pads CDR payloads to 4 bytes (the real bag's
@@ -650,7 +652,10 @@ TEST(Rosbag2, CorruptBagsAreClearErrors) {
   fs::create_directories(dir.path() / "empty");
   expect_input_error([&] { Rosbag2Reader r(dir.path() / "empty"); }, {"not a rosbag2 folder"});
   expect_input_error([&] { Rosbag2Reader r(dir.path() / "nothing_here"); }, {"nothing_here"});
-  EXPECT_THROW(guess_scan_input_format((dir.path() / "empty").string()), core::InputError);
+  // Any other folder is read as a folder of scan files, whose reader says what it lacks.
+  EXPECT_EQ(guess_scan_input_format((dir.path() / "empty").string()), ScanInputFormat::kFolder);
+  expect_input_error([&] { open_source((dir.path() / "empty").string(), kDefaults); },
+                     {"empty", "no sequence.yaml, no .pcd and no .bin files"});
 }
 
 }  // namespace
