@@ -95,8 +95,7 @@ bool RecentViews::column_seen_free(const VisibilityQuery& query, const Eigen::Ve
                       static_cast<float>(point.y() - column_m_), static_cast<float>(bottom)),
       Eigen::Vector3f(static_cast<float>(point.x() + column_m_),
                       static_cast<float>(point.y() + column_m_), static_cast<float>(top))};
-  const VisibilityCounts beams = query.in_box(column, margin_m);
-  return beams.free > 0 && beams.occupied == 0 && beams.occluded == 0;
+  return query.seen_through_box(column, margin_m);
 }
 
 }  // namespace ringtrack::core

@@ -441,8 +441,12 @@ bool VisibilityQuery::sees_through(const Eigen::Vector3d& point, double margin_m
   }
   const Box3 around{(point.array() - clearance_m).cast<float>(),
                     (point.array() + clearance_m).cast<float>()};
-  const VisibilityCounts beams = in_box(around, margin_m);
-  return beams.occupied == 0 && beams.occluded == 0;
+  bool blocked = false;  // one beam ending inside or before the cube decides
+  visit_box(around, margin_m, [&](std::size_t, Visibility v, double, double) {
+    blocked = v == Visibility::kOccupied || v == Visibility::kOccluded;
+    return !blocked;
+  });
+  return !blocked;
 }
 
 BeamRay VisibilityQuery::cell_ray(int ring, int column) const {
@@ -557,15 +561,32 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
       double exit = 0.0;
       if (!ray_box(ray.origin, ray.direction, lo, hi, entry, exit)) continue;
       const auto i = scan_->index(r, column);
-      visit(i, classify(scan_->status(i), scan_->range_m(i), entry, exit, margin_m), entry, exit);
+      if (!visit(i, classify(scan_->status(i), scan_->range_m(i), entry, exit, margin_m), entry,
+                 exit)) {
+        return;
+      }
     }
   }
 }
 
 VisibilityCounts VisibilityQuery::in_box(const Box3& world_box, double margin_m) const {
   VisibilityCounts counts;
-  visit_box(world_box, margin_m, [&](std::size_t, Visibility v, double, double) { counts.add(v); });
+  visit_box(world_box, margin_m, [&](std::size_t, Visibility v, double, double) {
+    counts.add(v);
+    return true;
+  });
   return counts;
+}
+
+bool VisibilityQuery::seen_through_box(const Box3& world_box, double margin_m) const {
+  bool free = false;
+  bool blocked = false;
+  visit_box(world_box, margin_m, [&](std::size_t, Visibility v, double, double) {
+    blocked = v == Visibility::kOccupied || v == Visibility::kOccluded;
+    free = free || v == Visibility::kFree;
+    return !blocked;  // one beam ending inside or before the box decides
+  });
+  return free && !blocked;
 }
 
 void VisibilityQuery::cells_in_box(const Box3& world_box, double margin_m,
@@ -573,6 +594,7 @@ void VisibilityQuery::cells_in_box(const Box3& world_box, double margin_m,
   out.clear();
   visit_box(world_box, margin_m, [&](std::size_t i, Visibility v, double entry, double exit) {
     out.push_back({i, v, entry, exit});
+    return true;
   });
 }
 

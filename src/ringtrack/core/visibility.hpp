@@ -166,6 +166,9 @@ class VisibilityQuery {
                                   double clearance_m) const;
   /// Verdicts of every beam that passes through the box (rays are half-lines from their origin).
   [[nodiscard]] VisibilityCounts in_box(const Box3& world_box, double margin_m) const;
+  /// in_box's free > 0 && occupied == 0 && occluded == 0, stopping at the first beam that ends
+  /// inside or before the box (the common answer for clutter, at a fraction of the cost).
+  [[nodiscard]] bool seen_through_box(const Box3& world_box, double margin_m) const;
   /// Like in_box, listing each beam; out is cleared first. Order: by ring, then by azimuth.
   void cells_in_box(const Box3& world_box, double margin_m, std::vector<BoxBeam>& out) const;
 
@@ -203,6 +206,7 @@ class VisibilityQuery {
   // Ring, column and beam distance of a point given in the frame of the sensor that fired.
   [[nodiscard]] std::optional<Located> locate_sensor_point(const Eigen::Vector3d& p) const;
   [[nodiscard]] std::optional<Located> locate(const Eigen::Vector3d& world_point) const;
+  // Calls visit(cell, verdict, entry, exit) for every beam through the box until it returns false.
   template <typename Visit>
   void visit_box(const Box3& world_box, double margin_m, Visit&& visit) const;
 

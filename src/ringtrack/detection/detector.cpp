@@ -365,92 +365,123 @@ bool Detector::new_to_the_scene(const core::OrganizedScan& scan, const Frame& fr
   return true;
 }
 
-void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,
-                             std::size_t end) {
-  const std::size_t n = end - begin;
-  bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
-  if (small && !may_be_small(n, frame)) {
-    ++stats_.too_small;
-    return;
-  }
-  // A small cluster where earlier scans saw free space is the strict model's to judge: the
-  // scene memory says something new is there, the model whether it has a person's shape.
-  const bool sparse = small && new_to_the_scene(scan, frame, begin, end);
-  if (sparse) {
-    small = false;
-  } else if (small && !may_confirm(n, frame)) {
-    ++stats_.too_small;  // neither new to the scene nor able to confirm a track
-    return;
-  }
+// The object model's view of a part: its extent and where it stands (world frame).
+struct Detector::PartShape {
+  Eigen::Vector3d mean;
+  Eigen::Vector3d lo;
+  Eigen::Vector3d hi;
+  double diagonal{0.0};
+  bool too_high{false};
+  bool too_tall{false};
+  bool too_wide{false};
+  bool too_short{false};
+  [[nodiscard]] bool strict() const { return !(too_high || too_tall || too_wide || too_short); }
+};
 
+Detector::PartShape Detector::measure_part(const core::OrganizedScan& scan, const Frame& frame,
+                                           std::size_t begin, std::size_t end) const {
   const float* range = scan.ranges().data();
   const auto columns = static_cast<std::uint32_t>(frame.columns);
   const auto top_ring_start = static_cast<std::uint32_t>(frame.rings - 1) * columns;
-
+  PartShape shape;
   Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = -lo;
+  shape.lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  shape.hi = -shape.lo;
   double range_sum = 0.0;
   bool touches_top_or_bottom = false;
   for (std::size_t k = begin; k < end; ++k) {
     const std::uint32_t i = cluster_[k];
     const Eigen::Vector3d& w = world_[k];
     sum += w;
-    lo = lo.cwiseMin(w);
-    hi = hi.cwiseMax(w);
+    shape.lo = shape.lo.cwiseMin(w);
+    shape.hi = shape.hi.cwiseMax(w);
     range_sum += range[i];
     touches_top_or_bottom |= i < columns || i >= top_ring_start;
   }
-  const double inv_n = 1.0 / static_cast<double>(n);
-  const Eigen::Vector3d mean = sum * inv_n;
-  const double height = hi.z() - lo.z();
-  const double diagonal = std::hypot(hi.x() - lo.x(), hi.y() - lo.y());
-  const double lowest = lo.z();
+  const double inv_n = 1.0 / static_cast<double>(end - begin);
+  shape.mean = sum * inv_n;
+  const double height = shape.hi.z() - shape.lo.z();
+  shape.diagonal = std::hypot(shape.hi.x() - shape.lo.x(), shape.hi.y() - shape.lo.y());
   // Rings this far apart sample an object of height h as an extent down to h minus two ring
   // gaps, so the extent is credited with one gap at the cluster's mean range.
   const double height_allowance = range_sum * inv_n * static_cast<double>(min_height_gap_tan_);
+  shape.too_high = shape.lo.z() - ground_z_m_ > config_.max_altitude_m;
+  shape.too_tall = height > config_.max_height_m;
+  shape.too_wide = shape.diagonal > config_.max_diagonal_m;
+  shape.too_short = !touches_top_or_bottom && height + height_allowance < config_.min_height_m;
+  return shape;
+}
 
-  const bool too_high = lowest - ground_z_m_ > config_.max_altitude_m;
-  const bool too_tall = height > config_.max_height_m;
-  const bool too_wide = diagonal > config_.max_diagonal_m;
-  const bool too_short = !touches_top_or_bottom && height + height_allowance < config_.min_height_m;
-  bool relaxed = false;
-  if (small || too_high || too_tall || too_wide || too_short) {
-    bool near_prediction = false;
-    const double r2 = config_.relaxed_radius_m * config_.relaxed_radius_m;
-    for (const Eigen::Vector3f& p : *frame.predictions) {
-      const double dx = static_cast<double>(p.x()) - mean.x();
-      const double dy = static_cast<double>(p.y()) - mean.y();
-      if (dx * dx + dy * dy <= r2) {
-        near_prediction = true;
-        break;
-      }
+bool Detector::relaxable(const PartShape& shape, const Frame& frame) const {
+  if (shape.too_high || shape.too_tall || shape.diagonal > config_.relaxed_max_diagonal_m) {
+    return false;
+  }
+  const double r2 = config_.relaxed_radius_m * config_.relaxed_radius_m;
+  for (const Eigen::Vector3f& p : *frame.predictions) {
+    const double dx = static_cast<double>(p.x()) - shape.mean.x();
+    const double dy = static_cast<double>(p.y()) - shape.mean.y();
+    if (dx * dx + dy * dy <= r2) return true;
+  }
+  return false;
+}
+
+void Detector::count_rejected(const PartShape& shape) {
+  ++stats_.clusters;
+  if (shape.too_high) {
+    ++stats_.too_high;
+  } else if (shape.too_tall) {
+    ++stats_.too_tall;
+  } else if (shape.too_wide) {
+    ++stats_.too_wide;
+  } else {
+    ++stats_.too_short;
+  }
+}
+
+// A cluster of min_cluster_points or more: the strict model, else the relaxed one near a
+// prediction. A smaller one: sparse when new to the scene and of the strict model's shape,
+// relaxed when near a prediction (with relaxed_min_cluster_points, or new to the scene).
+void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,
+                             std::size_t end) {
+  const std::size_t n = end - begin;
+  const bool small = n < static_cast<std::size_t>(config_.min_cluster_points);
+  if (small && !may_be_small(n, frame)) {
+    ++stats_.too_small;
+    return;
+  }
+  const PartShape shape = measure_part(scan, frame, begin, end);
+  if (!small) {
+    if (shape.strict()) return add_detection(shape, begin, end, false, false, true);
+    if (relaxable(shape, frame)) return add_detection(shape, begin, end, true, false, true);
+    count_rejected(shape);
+    return;
+  }
+  // The scene memory is the costly question (a moving sensor's recent views probe beams and
+  // columns for every point), so it is asked only where its answer decides: a small cluster
+  // that fails the strict model and lies near no prediction is dropped unasked.
+  if (shape.strict()) {
+    if (new_to_the_scene(scan, frame, begin, end)) {
+      return add_detection(shape, begin, end, false, true, true);
     }
-    if (near_prediction && !too_high && !too_tall && diagonal <= config_.relaxed_max_diagonal_m) {
-      relaxed = true;
-    } else {
-      if (small) {
-        ++stats_.too_small;
-        return;
-      }
-      ++stats_.clusters;
-      if (too_high) {
-        ++stats_.too_high;
-      } else if (too_tall) {
-        ++stats_.too_tall;
-      } else if (too_wide) {
-        ++stats_.too_wide;
-      } else {
-        ++stats_.too_short;
-      }
-      return;
+    if (may_confirm(n, frame) && relaxable(shape, frame)) {
+      return add_detection(shape, begin, end, true, false, false);
+    }
+  } else if (relaxable(shape, frame)) {
+    if (may_confirm(n, frame)) return add_detection(shape, begin, end, true, false, false);
+    if (new_to_the_scene(scan, frame, begin, end)) {
+      return add_detection(shape, begin, end, true, false, true);
     }
   }
+  ++stats_.too_small;
+}
 
-  if (!small) ++stats_.clusters;
+void Detector::add_detection(const PartShape& shape, std::size_t begin, std::size_t end,
+                             bool relaxed, bool sparse, bool counted) {
+  if (counted) ++stats_.clusters;
+  const double inv_n = 1.0 / static_cast<double>(end - begin);
   Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
   for (std::size_t k = begin; k < end; ++k) {
-    const Eigen::Vector3d d = world_[k] - mean;
+    const Eigen::Vector3d d = world_[k] - shape.mean;
     cov.noalias() += d * d.transpose();
   }
   cov *= inv_n;
@@ -458,17 +489,17 @@ void Detector::evaluate_part(const core::OrganizedScan& scan, const Frame& frame
   for (int a = 0; a < 3; ++a) cov(a, a) = std::max(cov(a, a), floor);
 
   core::Detection& d = next_detection();
-  d.centroid = mean.cast<float>();
+  d.centroid = shape.mean.cast<float>();
   d.covariance = cov.cast<float>();
-  d.box.min = lo.cast<float>();
-  d.box.max = hi.cast<float>();
+  d.box.min = shape.lo.cast<float>();
+  d.box.max = shape.hi.cast<float>();
   d.indices.assign(cluster_.begin() + static_cast<std::ptrdiff_t>(begin),
                    cluster_.begin() + static_cast<std::ptrdiff_t>(end));
   std::sort(d.indices.begin(), d.indices.end());
   d.relaxed = relaxed;
-  d.sparse = sparse && !relaxed;
+  d.sparse = sparse;
   stats_.relaxed += relaxed ? 1 : 0;
-  stats_.sparse += d.sparse ? 1 : 0;
+  stats_.sparse += sparse ? 1 : 0;
   ++stats_.detections;
 }
 

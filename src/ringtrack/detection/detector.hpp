@@ -24,9 +24,11 @@ inline constexpr std::uint8_t kSegmentLabel = 1;
 struct DetectorStats {
   std::size_t segment_points{0};  ///< valid cells labelled kSegmentLabel
   std::size_t clusters{0};        ///< clusters with at least min_cluster_points points, or
-                                  ///< fewer but new to the scene (each part of a split counts)
+                                  ///< fewer but accepted as new to the scene (each part of a
+                                  ///< split counts)
   std::size_t splits{0};          ///< cuts made by the split step (each adds one cluster)
-  std::size_t too_small{0};       ///< clusters dropped for having fewer points
+  std::size_t too_small{0};       ///< clusters dropped for having fewer points (the scene
+                                  ///< memory is not asked about one that fails the model)
   std::size_t too_high{0};        ///< lowest point more than max_altitude_m above the ground
   std::size_t too_tall{0};        ///< vertical extent above max_height_m
   std::size_t too_wide{0};        ///< horizontal diagonal above the model's maximum
@@ -130,8 +132,15 @@ class Detector {
                                       std::size_t begin, std::size_t end) const;
   void split_cluster(const Frame& frame);
   bool find_split(const Frame& frame, std::size_t begin, std::size_t end, double& cut);
+  struct PartShape;  // the object model's view of a part
+  [[nodiscard]] PartShape measure_part(const core::OrganizedScan& scan, const Frame& frame,
+                                       std::size_t begin, std::size_t end) const;
+  [[nodiscard]] bool relaxable(const PartShape& shape, const Frame& frame) const;
+  void count_rejected(const PartShape& shape);
   void evaluate_part(const core::OrganizedScan& scan, const Frame& frame, std::size_t begin,
                      std::size_t end);
+  void add_detection(const PartShape& shape, std::size_t begin, std::size_t end, bool relaxed,
+                     bool sparse, bool counted);
   core::Detection& next_detection();
 
   core::DetectionConfig config_;

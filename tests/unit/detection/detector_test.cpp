@@ -357,7 +357,15 @@ TEST(Detector, SparseClustersOnlyInFrontOfALearnedBackground) {
   near.paint(8, 8, 100, 1, 10.0);
   Detector model_check{DetectionConfig{}};
   EXPECT_TRUE(model_check.detect(near.scan, near.labels, {}, {}, &near_background).empty());
-  EXPECT_EQ(model_check.stats().too_short, 1u);
+  // Dropped as too small: the memory is not asked about a small cluster of the wrong shape.
+  EXPECT_EQ(model_check.stats().too_small, 1u);
+  // With a lower minimum height the same point is a sparse detection: it was the model.
+  DetectionConfig low;
+  low.min_height_m = 0.3;
+  Detector low_check(low);
+  const auto& l = low_check.detect(near.scan, near.labels, {}, {}, &near_background);
+  ASSERT_EQ(l.size(), 1u);
+  EXPECT_TRUE(l[0].sparse);
 }
 
 TEST(Detector, ObjectModelAndOutputAreInTheWorldFrame) {
