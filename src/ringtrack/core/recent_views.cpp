@@ -70,10 +70,17 @@ bool RecentViews::seen_free_before(const OrganizedScan& scan, std::size_t cell,
   for (const int lag : lags_) {
     const View* view = view_back(lag);
     if (view == nullptr) break;
-    if (view->query->sees_through(world_point, margin_m, lateral_m_, clearance_m_)) {
+    const PointProbe probe = view->query->probe(world_point, margin_m);
+    if (view->query->sees_through(world_point, probe, margin_m, lateral_m_, clearance_m_)) {
       return true;
     }
-    if (column_m_ > 0.0 && column_seen_free(*view->query, world_point, margin_m)) return true;
+    // A beam that passed the point itself and ended at it says something stood there: the
+    // column, a fallback for points no earlier beam passed closely, is not asked.
+    const bool hit_there =
+        probe.visibility == Visibility::kOccupied && probe.lateral_m <= lateral_m_;
+    if (column_m_ > 0.0 && !hit_there && column_seen_free(*view->query, world_point, margin_m)) {
+      return true;
+    }
   }
   return false;
 }

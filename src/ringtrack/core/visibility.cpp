@@ -429,7 +429,11 @@ PointProbe VisibilityQuery::probe(const Eigen::Vector3d& world_point, double mar
 
 bool VisibilityQuery::sees_through(const Eigen::Vector3d& point, double margin_m, double lateral_m,
                                    double clearance_m) const {
-  const PointProbe p = probe(point, margin_m);
+  return sees_through(point, probe(point, margin_m), margin_m, lateral_m, clearance_m);
+}
+
+bool VisibilityQuery::sees_through(const Eigen::Vector3d& point, const PointProbe& p,
+                                   double margin_m, double lateral_m, double clearance_m) const {
   if (p.visibility != Visibility::kFree || p.lateral_m > lateral_m) return false;
   // A descending beam that passes h above a point on the ground lands on the ground h / tan(its
   // depression) beyond it: at grazing angles that is metres, and the ground would be seen

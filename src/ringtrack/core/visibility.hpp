@@ -164,6 +164,9 @@ class VisibilityQuery {
   /// (from another viewpoint the nearest beam may pass just beside a thin pole and see past it).
   [[nodiscard]] bool sees_through(const Eigen::Vector3d& point, double margin_m, double lateral_m,
                                   double clearance_m) const;
+  /// The same with the point's probe(point, margin_m) already made.
+  [[nodiscard]] bool sees_through(const Eigen::Vector3d& point, const PointProbe& probe,
+                                  double margin_m, double lateral_m, double clearance_m) const;
   /// Verdicts of every beam that passes through the box (rays are half-lines from their origin).
   [[nodiscard]] VisibilityCounts in_box(const Box3& world_box, double margin_m) const;
   /// in_box's free > 0 && occupied == 0 && occluded == 0, stopping at the first beam that ends

@@ -404,6 +404,26 @@ TEST(RecentViews, AnObjectThatStoodThereAllAlongFillsItsColumns) {
   EXPECT_EQ(f.new_points(21, standing, ground).second, 0);
 }
 
+TEST(RecentViews, WhereAnEarlierBeamHitThePointItselfTheColumnIsNotAsked) {
+  // A box floating 1.2-1.8 m up (a sign, an overhang), there all along: the space under it is
+  // empty, so by its columns alone its hits would be new. An earlier beam that passed within
+  // moving_lateral_m of a hit and ended at it says something stood there, and the column is not
+  // asked: only hits no earlier beam passed closely are left to the column.
+  const Eigen::AlignedBox3d floating(Eigen::Vector3d(7.0, 0.3, 1.2),
+                                     Eigen::Vector3d(7.4, 0.7, 1.8));
+  Scene scene{true, std::nullopt, floating};
+  Flight column_alone(column_only(0.1));  // no earlier beam passes a hit within 0 m
+  column_alone.fly(21, scene);
+  const auto [inside, fresh] = column_alone.new_points(21, scene, floating);
+  ASSERT_GT(inside, 10);
+  EXPECT_GE(fresh * 3, inside) << fresh << " of " << inside;  // measured: 9 of 18
+  BackgroundRangeConfig wide = column_only(0.1);
+  wide.moving_lateral_m = 1.0;  // every hit has an earlier beam this close
+  Flight f(wide);
+  f.fly(21, scene);
+  EXPECT_LE(f.new_points(21, scene, floating).second, 1);  // measured: 1
+}
+
 TEST(RecentViews, OnlyScansAtTheLagsAnswerAndResetForgets) {
   Flight f;
   const Scene empty{true, std::nullopt, std::nullopt};
