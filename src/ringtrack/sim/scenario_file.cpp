@@ -325,19 +325,207 @@ std::string all_column_names() {
   return out;
 }
 
+// Where each column sits in a row. Files without a header are positional; a header may name the
+// columns in any order and leave optional ones out.
+struct CsvLayout {
+  int column_at[kColumns]{};  // field index of each column, -1 = absent
+  bool header_seen = false;
+  std::size_t expected_fields = 0;  // with a header: at most its size ...
+  std::size_t required_fields = 0;  // ... and at least up to its last required column
+};
+
+CsvLayout positional_layout() {
+  CsvLayout layout;
+  for (int c = 0; c < kColumns; ++c) layout.column_at[c] = c;
+  return layout;
+}
+
+// Refuses unknown, repeated and missing required columns here, so that rows can trust the layout.
+CsvLayout layout_from_header(const std::vector<std::string>& f, const std::string& where) {
+  CsvLayout layout;
+  layout.header_seen = true;
+  layout.expected_fields = f.size();
+  for (int c = 0; c < kColumns; ++c) layout.column_at[c] = -1;
+  for (std::size_t i = 0; i < f.size(); ++i) {
+    const std::string& name = f[i];
+    int c = 0;
+    while (c < kColumns && name != kColumnNames[c]) ++c;
+    if (c == kColumns) {
+      throw core::InputError(where + "header: unknown column '" + name + "' (expected " +
+                             all_column_names() + ")");
+    }
+    if (layout.column_at[c] >= 0)
+      throw core::InputError(where + "header: column '" + name + "' given twice");
+    layout.column_at[c] = static_cast<int>(i);
+  }
+  for (const int c : {kT, kId, kClass, kX, kY}) {
+    layout.required_fields =
+        std::max(layout.required_fields, static_cast<std::size_t>(layout.column_at[c] + 1));
+    if (layout.column_at[c] < 0) {
+      throw core::InputError(where + "header: column '" + kColumnNames[c] +
+                             "' is missing (t, id, class, x, y are required)");
+    }
+  }
+  return layout;
+}
+
+// Trailing optional cells may be left out (as "t,id,class,x,y" rows under a header with z).
+void check_field_count(const CsvLayout& layout, std::size_t fields, const std::string& where) {
+  if (layout.header_seen ? (fields < layout.required_fields || fields > layout.expected_fields)
+                         : (fields < 5 || fields > kColumns)) {
+    throw core::InputError(
+        where +
+        (layout.header_seen
+             ? "expected " + std::to_string(layout.required_fields) + "-" +
+                   std::to_string(layout.expected_fields) + " fields as the header says"
+             : std::string("expected t, id, class, x, y[, z[, height_m[, width_m[, "
+                           "reflectivity]]]]")) +
+        " (" + std::to_string(fields) + " fields)");
+  }
+}
+
+// One data row seen through the layout; its errors name the line, the field and the column.
+class CsvRow {
+ public:
+  CsvRow(const std::vector<std::string>& f, const CsvLayout& layout, const std::string& where)
+      : f_(f), layout_(layout), where_(where) {}
+
+  [[nodiscard]] const std::string& where() const { return where_; }
+
+  // Cell of column c, or nullptr when the column is absent or the cell empty (optional ones).
+  [[nodiscard]] const std::string* cell(int c) const {
+    const int i = layout_.column_at[c];
+    if (i < 0 || static_cast<std::size_t>(i) >= f_.size()) return nullptr;
+    return &f_[static_cast<std::size_t>(i)];
+  }
+
+  // Text of a column known to be present (required columns; the field count was checked).
+  [[nodiscard]] const std::string& text_of(int c) const {
+    return f_[static_cast<std::size_t>(layout_.column_at[c])];
+  }
+
+  // "field 4 (x): ", the prefix of every message about one cell.
+  [[nodiscard]] std::string field_label(int c) const {
+    return "field " + std::to_string(layout_.column_at[c] + 1) + " (" + kColumnNames[c] + "): ";
+  }
+
+  [[nodiscard]] std::optional<double> number(int c, bool required) const {
+    const std::string* text_cell = cell(c);
+    if (!text_cell || (!required && text_cell->empty())) return std::nullopt;
+    double v = 0.0;
+    try {
+      std::size_t used = 0;
+      v = std::stod(*text_cell, &used);
+      if (used != text_cell->size() || !std::isfinite(v)) throw std::invalid_argument("x");
+    } catch (const std::exception&) {
+      throw core::InputError(where_ + field_label(c) + "expected a number, got '" + *text_cell +
+                             "'");
+    }
+    return v;
+  }
+
+ private:
+  const std::vector<std::string>& f_;
+  const CsvLayout& layout_;
+  const std::string& where_;
+};
+
+std::uint32_t parse_actor_id(const std::string& id_text, const std::string& where) {
+  unsigned long id = 0;
+  try {
+    std::size_t used = 0;
+    id = std::stoul(id_text, &used);
+    if (used != id_text.size() || id == 0 || id > 0xffffffffUL) throw std::invalid_argument("x");
+  } catch (const std::exception&) {
+    throw core::InputError(where + "id: expected an integer >= 1, got '" + id_text + "'");
+  }
+  return static_cast<std::uint32_t>(id);
+}
+
+ObjectClass parse_actor_class(const std::string& text, const std::string& where) {
+  try {
+    return class_from_name(text);
+  } catch (const core::Error& e) {
+    throw core::InputError(where + e.what());
+  }
+}
+
+// Gathers the rows into actors by id. Body values are per actor, so each one remembers the line
+// that first gave it, for the message when a later row disagrees.
+class TrajectoryRows {
+ public:
+  void add(const CsvRow& row, std::size_t line_no) {
+    const double t = *row.number(kT, true);
+    const double x = *row.number(kX, true);
+    const double y = *row.number(kY, true);
+    const double z = row.number(kZ, false).value_or(std::nan(""));
+    const std::string& id_text = row.text_of(kId);
+    const std::uint32_t id = parse_actor_id(id_text, row.where());
+    const ObjectClass c = parse_actor_class(row.text_of(kClass), row.where());
+    auto& a = by_id_[id];
+    if (!a.waypoints.empty() && a.object_class != c) {
+      throw core::InputError(row.where() + "id " + id_text + " changes class");
+    }
+    a.id = id;
+    a.object_class = c;
+    if (!a.waypoints.empty() && !(t > a.waypoints.back().t_s)) {
+      throw core::InputError(row.where() + "id " + id_text + ": times must increase");
+    }
+    body(row, line_no, a, kHeight, a.height_m, kMinBodyHeightM, kMaxBodyHeightM, "height (m)");
+    body(row, line_no, a, kWidth, a.width_m, kMinBodyWidthM, kMaxBodyWidthM, "width (m)");
+    body(row, line_no, a, kReflectivity, a.reflectivity, 0.0, 1.0, "reflectivity");
+    a.waypoints.push_back({t, {x, y, z}});
+  }
+
+  std::vector<ScriptedActor> actors() && {
+    std::vector<ScriptedActor> out;
+    for (auto& [id, a] : by_id_) out.push_back(std::move(a));
+    return out;
+  }
+
+ private:
+  // Body values: per actor, within their range, the same on every row that gives them.
+  void body(const CsvRow& row, std::size_t line_no, const ScriptedActor& a, int col,
+            std::optional<double>& slot, double lo, double hi, const char* what) {
+    const std::optional<double> v = row.number(col, false);
+    if (!v) return;
+    const bool has_body =
+        a.object_class == ObjectClass::kPerson || a.object_class == ObjectClass::kDistractor;
+    const std::string& where = row.where();
+    const std::string column = row.field_label(col);
+    if (col != kReflectivity && !has_body) {
+      throw core::InputError(where + column + "a body " + what +
+                             " applies to people and distractors only, not to a " +
+                             std::string(class_name(a.object_class)));
+    }
+    if (!(*v >= lo && *v <= hi)) {
+      std::ostringstream m;
+      m << where << column << "expected a " << what << " in [" << lo << ", " << hi << "], got '"
+        << row.text_of(col) << "'";
+      throw core::InputError(m.str());
+    }
+    const auto key = std::make_pair(a.id, col);
+    if (slot && *slot != *v) {
+      std::ostringstream m;
+      m << where << column << "id " << a.id << " already has " << *slot << " (line "
+        << body_line_[key] << "); body values are per actor";
+      throw core::InputError(m.str());
+    }
+    if (!slot) body_line_[key] = line_no;
+    slot = v;
+  }
+
+  std::map<std::uint32_t, ScriptedActor> by_id_;
+  // Line where each actor's body values were first given (they must agree on every row).
+  std::map<std::pair<std::uint32_t, int>, std::size_t> body_line_;
+};
+
 }  // namespace
 
 std::vector<ScriptedActor> parse_trajectories_csv(std::string_view text,
                                                   const std::string& source) {
-  std::map<std::uint32_t, ScriptedActor> by_id;
-  // Line where each actor's body values were first given (they must agree on every row).
-  std::map<std::pair<std::uint32_t, int>, std::size_t> body_line;
-  // Field index of each column, -1 = absent; positional until a header says otherwise.
-  int column_at[kColumns];
-  for (int c = 0; c < kColumns; ++c) column_at[c] = c;
-  bool header_seen = false;
-  std::size_t expected_fields = 0;  // with a header: at most its size ...
-  std::size_t required_fields = 0;  // ... and at least up to its last required column
+  TrajectoryRows rows;
+  CsvLayout layout = positional_layout();  // until a header says otherwise
   bool first_row = true;
   std::size_t line_no = 0;
   std::size_t pos = 0;
@@ -356,131 +544,14 @@ std::vector<ScriptedActor> parse_trajectories_csv(std::string_view text,
       // The header is the first line that is neither blank nor a comment, when its first cell is
       // not a number.
       if (!f.empty() && !parses_as_number(f[0])) {
-        header_seen = true;
-        expected_fields = f.size();
-        for (int c = 0; c < kColumns; ++c) column_at[c] = -1;
-        for (std::size_t i = 0; i < f.size(); ++i) {
-          const std::string& name = f[i];
-          int c = 0;
-          while (c < kColumns && name != kColumnNames[c]) ++c;
-          if (c == kColumns) {
-            throw core::InputError(where + "header: unknown column '" + name + "' (expected " +
-                                   all_column_names() + ")");
-          }
-          if (column_at[c] >= 0)
-            throw core::InputError(where + "header: column '" + name + "' given twice");
-          column_at[c] = static_cast<int>(i);
-        }
-        for (const int c : {kT, kId, kClass, kX, kY}) {
-          required_fields = std::max(required_fields, static_cast<std::size_t>(column_at[c] + 1));
-          if (column_at[c] < 0) {
-            throw core::InputError(where + "header: column '" + kColumnNames[c] +
-                                   "' is missing (t, id, class, x, y are required)");
-          }
-        }
+        layout = layout_from_header(f, where);
         continue;
       }
     }
-    // Trailing optional cells may be left out (as "t,id,class,x,y" rows under a header with z).
-    if (header_seen ? (f.size() < required_fields || f.size() > expected_fields)
-                    : (f.size() < 5 || f.size() > kColumns)) {
-      throw core::InputError(
-          where +
-          (header_seen ? "expected " + std::to_string(required_fields) + "-" +
-                             std::to_string(expected_fields) + " fields as the header says"
-                       : std::string("expected t, id, class, x, y[, z[, height_m[, width_m[, "
-                                     "reflectivity]]]]")) +
-          " (" + std::to_string(f.size()) + " fields)");
-    }
-    // Cell of column c, or nullptr when the column is absent or the cell empty (optional ones).
-    const auto cell = [&](int c) -> const std::string* {
-      const int i = column_at[c];
-      if (i < 0 || static_cast<std::size_t>(i) >= f.size()) return nullptr;
-      return &f[static_cast<std::size_t>(i)];
-    };
-    // Text of a column known to be present (required columns; the field count was checked).
-    const auto text_of = [&](int c) -> const std::string& {
-      return f[static_cast<std::size_t>(column_at[c])];
-    };
-    const auto number = [&](int c, bool required) -> std::optional<double> {
-      const std::string* text_cell = cell(c);
-      if (!text_cell || (!required && text_cell->empty())) return std::nullopt;
-      double v = 0.0;
-      try {
-        std::size_t used = 0;
-        v = std::stod(*text_cell, &used);
-        if (used != text_cell->size() || !std::isfinite(v)) throw std::invalid_argument("x");
-      } catch (const std::exception&) {
-        throw core::InputError(where + "field " + std::to_string(column_at[c] + 1) + " (" +
-                               kColumnNames[c] + "): expected a number, got '" + *text_cell + "'");
-      }
-      return v;
-    };
-    const double t = *number(kT, true);
-    const double x = *number(kX, true);
-    const double y = *number(kY, true);
-    const double z = number(kZ, false).value_or(std::nan(""));
-    const std::string& id_text = text_of(kId);
-    unsigned long id = 0;
-    try {
-      std::size_t used = 0;
-      id = std::stoul(id_text, &used);
-      if (used != id_text.size() || id == 0 || id > 0xffffffffUL) throw std::invalid_argument("x");
-    } catch (const std::exception&) {
-      throw core::InputError(where + "id: expected an integer >= 1, got '" + id_text + "'");
-    }
-    ObjectClass c;
-    try {
-      c = class_from_name(text_of(kClass));
-    } catch (const core::Error& e) {
-      throw core::InputError(where + e.what());
-    }
-    auto& a = by_id[static_cast<std::uint32_t>(id)];
-    if (!a.waypoints.empty() && a.object_class != c) {
-      throw core::InputError(where + "id " + id_text + " changes class");
-    }
-    a.id = static_cast<std::uint32_t>(id);
-    a.object_class = c;
-    if (!a.waypoints.empty() && !(t > a.waypoints.back().t_s)) {
-      throw core::InputError(where + "id " + id_text + ": times must increase");
-    }
-    // Body values: per actor, within their range, the same on every row that gives them.
-    const bool has_body = c == ObjectClass::kPerson || c == ObjectClass::kDistractor;
-    const auto body = [&](int col, std::optional<double>& slot, double lo, double hi,
-                          const char* what) {
-      const std::optional<double> v = number(col, false);
-      if (!v) return;
-      const std::string column =
-          "field " + std::to_string(column_at[col] + 1) + " (" + kColumnNames[col] + "): ";
-      if (col != kReflectivity && !has_body) {
-        throw core::InputError(where + column + "a body " + what +
-                               " applies to people and distractors only, not to a " +
-                               std::string(class_name(c)));
-      }
-      if (!(*v >= lo && *v <= hi)) {
-        std::ostringstream m;
-        m << where << column << "expected a " << what << " in [" << lo << ", " << hi << "], got '"
-          << text_of(col) << "'";
-        throw core::InputError(m.str());
-      }
-      const auto key = std::make_pair(a.id, col);
-      if (slot && *slot != *v) {
-        std::ostringstream m;
-        m << where << column << "id " << a.id << " already has " << *slot << " (line "
-          << body_line[key] << "); body values are per actor";
-        throw core::InputError(m.str());
-      }
-      if (!slot) body_line[key] = line_no;
-      slot = v;
-    };
-    body(kHeight, a.height_m, kMinBodyHeightM, kMaxBodyHeightM, "height (m)");
-    body(kWidth, a.width_m, kMinBodyWidthM, kMaxBodyWidthM, "width (m)");
-    body(kReflectivity, a.reflectivity, 0.0, 1.0, "reflectivity");
-    a.waypoints.push_back({t, {x, y, z}});
+    check_field_count(layout, f.size(), where);
+    rows.add(CsvRow(f, layout, where), line_no);
   }
-  std::vector<ScriptedActor> out;
-  for (auto& [id, a] : by_id) out.push_back(std::move(a));
-  return out;
+  return std::move(rows).actors();
 }
 
 std::string format_trajectories_csv(const std::vector<ScriptedActor>& actors) {
