@@ -139,130 +139,169 @@ Column binary_column(const std::uint8_t* data, const PcdHeader& h, const PcdFiel
   return {data + f.offset, h.point_bytes(), f.type, f.size};
 }
 
-std::vector<Column> load_columns(std::span<const std::uint8_t> bytes, const PcdHeader& h,
-                                 const std::string& name,
-                                 const std::vector<const PcdField*>& wanted, Data& data) {
+// The binary layout is point-major: each field's column is a stride through the file's bytes.
+std::vector<Column> binary_columns(std::span<const std::uint8_t> bytes, const PcdHeader& h,
+                                   const std::string& name,
+                                   const std::vector<const PcdField*>& wanted) {
   const std::size_t n = h.points();
   const std::size_t record = h.point_bytes();
   const std::size_t available = bytes.size() - h.data_offset;
+  if (available / record < n) {
+    fail(name, "truncated binary data: expected " + std::to_string(n) + " points of " +
+                   std::to_string(record) + " bytes (" + std::to_string(n * record) +
+                   " bytes) after the header at offset " + std::to_string(h.data_offset) +
+                   ", found " + std::to_string(available) + " bytes");
+  }
   std::vector<Column> columns;
-  switch (h.encoding) {
-    case PcdEncoding::kBinary: {
-      if (available / record < n) {
-        fail(name, "truncated binary data: expected " + std::to_string(n) + " points of " +
-                       std::to_string(record) + " bytes (" + std::to_string(n * record) +
-                       " bytes) after the header at offset " + std::to_string(h.data_offset) +
-                       ", found " + std::to_string(available) + " bytes");
-      }
-      for (const auto* f : wanted)
-        columns.push_back(binary_column(bytes.data() + h.data_offset, h, *f));
-      break;
+  for (const auto* f : wanted)
+    columns.push_back(binary_column(bytes.data() + h.data_offset, h, *f));
+  return columns;
+}
+
+// Checks the size prefix against the header and the file before anything is allocated, then
+// decompresses into data.decompressed.
+void decompress_pcd_data(std::span<const std::uint8_t> bytes, const PcdHeader& h,
+                         const std::string& name, Data& data) {
+  const std::size_t n = h.points();
+  const std::size_t record = h.point_bytes();
+  const std::size_t available = bytes.size() - h.data_offset;
+  if (available < 8) {
+    fail(name, "truncated binary_compressed data: expected the 8-byte size prefix at offset " +
+                   std::to_string(h.data_offset));
+  }
+  std::uint32_t compressed = 0;
+  std::uint32_t uncompressed = 0;
+  std::memcpy(&compressed, bytes.data() + h.data_offset, 4);
+  std::memcpy(&uncompressed, bytes.data() + h.data_offset + 4, 4);
+  if (n > std::numeric_limits<std::uint32_t>::max() / record || uncompressed != n * record) {
+    fail(name, "binary_compressed data declares " + std::to_string(uncompressed) +
+                   " uncompressed bytes, expected " + std::to_string(n) + " points x " +
+                   std::to_string(record) + " bytes = " + std::to_string(n * record));
+  }
+  if (compressed > available - 8) {
+    fail(name, "truncated binary_compressed data: expected " + std::to_string(compressed) +
+                   " compressed bytes at offset " + std::to_string(h.data_offset + 8) + ", found " +
+                   std::to_string(available - 8));
+  }
+  // Refused before it is allocated: a header's point count and size prefix are easy to make
+  // agree, but no LZF stream decodes to more than kLzfMaxExpansion times its own size.
+  if (static_cast<std::uint64_t>(compressed) * kLzfMaxExpansion < uncompressed) {
+    fail(name, "binary_compressed data declares " + std::to_string(uncompressed) +
+                   " uncompressed bytes, more than " + std::to_string(compressed) +
+                   " compressed bytes can hold (at most " + std::to_string(kLzfMaxExpansion) +
+                   " times as many)");
+  }
+  data.decompressed.resize(uncompressed);
+  try {
+    lzf_decompress(bytes.subspan(h.data_offset + 8, compressed), data.decompressed);
+  } catch (const core::InputError& e) {
+    fail(name, std::string("corrupt binary_compressed data (") + e.what() +
+                   ", stream starts at file offset " + std::to_string(h.data_offset + 8) + ")");
+  }
+}
+
+std::vector<Column> compressed_columns(std::span<const std::uint8_t> bytes, const PcdHeader& h,
+                                       const std::string& name,
+                                       const std::vector<const PcdField*>& wanted, Data& data) {
+  decompress_pcd_data(bytes, h, name, data);
+  const std::size_t n = h.points();
+  // Field-major layout: all points' bytes of field 0, then of field 1, ...
+  std::vector<Column> columns;
+  for (const auto* f : wanted) {
+    std::size_t start = 0;
+    for (const auto& g : h.fields) {
+      if (&g == f) break;
+      start += n * g.bytes();
     }
-    case PcdEncoding::kBinaryCompressed: {
-      if (available < 8) {
-        fail(name, "truncated binary_compressed data: expected the 8-byte size prefix at offset " +
-                       std::to_string(h.data_offset));
-      }
-      std::uint32_t compressed = 0;
-      std::uint32_t uncompressed = 0;
-      std::memcpy(&compressed, bytes.data() + h.data_offset, 4);
-      std::memcpy(&uncompressed, bytes.data() + h.data_offset + 4, 4);
-      if (n > std::numeric_limits<std::uint32_t>::max() / record || uncompressed != n * record) {
-        fail(name, "binary_compressed data declares " + std::to_string(uncompressed) +
-                       " uncompressed bytes, expected " + std::to_string(n) + " points x " +
-                       std::to_string(record) + " bytes = " + std::to_string(n * record));
-      }
-      if (compressed > available - 8) {
-        fail(name, "truncated binary_compressed data: expected " + std::to_string(compressed) +
-                       " compressed bytes at offset " + std::to_string(h.data_offset + 8) +
-                       ", found " + std::to_string(available - 8));
-      }
-      // Refused before it is allocated: a header's point count and size prefix are easy to make
-      // agree, but no LZF stream decodes to more than kLzfMaxExpansion times its own size.
-      if (static_cast<std::uint64_t>(compressed) * kLzfMaxExpansion < uncompressed) {
-        fail(name, "binary_compressed data declares " + std::to_string(uncompressed) +
-                       " uncompressed bytes, more than " + std::to_string(compressed) +
-                       " compressed bytes can hold (at most " + std::to_string(kLzfMaxExpansion) +
-                       " times as many)");
-      }
-      data.decompressed.resize(uncompressed);
-      try {
-        lzf_decompress(bytes.subspan(h.data_offset + 8, compressed), data.decompressed);
-      } catch (const core::InputError& e) {
-        fail(name, std::string("corrupt binary_compressed data (") + e.what() +
-                       ", stream starts at file offset " + std::to_string(h.data_offset + 8) + ")");
-      }
-      // Field-major layout: all points' bytes of field 0, then of field 1, ...
-      for (const auto* f : wanted) {
-        std::size_t start = 0;
-        for (const auto& g : h.fields) {
-          if (&g == f) break;
-          start += n * g.bytes();
-        }
-        columns.push_back({data.decompressed.data() + start, f->bytes(), f->type, f->size});
-      }
-      break;
-    }
-    case PcdEncoding::kAscii: {
-      std::vector<std::size_t> token_of;  // token index of each wanted field
-      std::size_t tokens_per_point = 0;
-      for (const auto* f : wanted) {
-        std::size_t t = 0;
-        for (const auto& g : h.fields) {
-          if (&g == f) break;
-          t += static_cast<std::size_t>(g.count);
-        }
-        token_of.push_back(t);
-      }
-      for (const auto& g : h.fields) tokens_per_point += static_cast<std::size_t>(g.count);
-      // Grown line by line rather than sized from POINTS, so a header claiming billions of points
-      // in a small file cannot exhaust memory; every value needs at least two bytes.
-      data.ascii.assign(wanted.size(), {});
-      for (auto& v : data.ascii) v.reserve(std::min(n, available / (2 * tokens_per_point) + 1));
-      std::size_t point = 0;
-      std::size_t line_no = h.header_lines;
-      std::size_t pos = h.data_offset;
-      while (pos < bytes.size()) {
-        std::size_t end = pos;
-        while (end < bytes.size() && bytes[end] != '\n') ++end;
-        ++line_no;
-        const std::string_view line(reinterpret_cast<const char*>(bytes.data()) + pos, end - pos);
-        pos = end + 1;
-        const auto tokens = split_tokens(line);
-        if (tokens.empty()) continue;
-        const std::string where = "line " + std::to_string(line_no);
-        if (point == n) {
-          fail(name, where + ": more point lines than POINTS/WIDTH*HEIGHT = " + std::to_string(n));
-        }
-        if (tokens.size() != tokens_per_point) {
-          fail(name, where + ": expected " + std::to_string(tokens_per_point) + " values, got " +
-                         std::to_string(tokens.size()));
-        }
-        for (std::size_t k = 0; k < wanted.size(); ++k) {
-          // F4 values straight to float: decimal -> double -> float can round twice.
-          const auto v = wanted[k]->type == 'F' && wanted[k]->size == 4
-                             ? parse_float(tokens[token_of[k]])
-                             : parse_double(tokens[token_of[k]]);
-          if (!v) {
-            fail(name, where + ", field '" + wanted[k]->name + "': expected a number, got " +
-                           quoted(tokens[token_of[k]]));
-          }
-          data.ascii[k].push_back(*v);
-        }
-        ++point;
-      }
-      if (point != n) {
-        fail(name, "truncated ascii data: expected " + std::to_string(n) + " point lines, found " +
-                       std::to_string(point));
-      }
-      for (const auto& v : data.ascii) {
-        columns.push_back(
-            {reinterpret_cast<const std::uint8_t*>(v.data()), sizeof(double), 'F', 8});
-      }
-      break;
-    }
+    columns.push_back({data.decompressed.data() + start, f->bytes(), f->type, f->size});
   }
   return columns;
+}
+
+// Parses the ascii point lines into data.ascii, one vector of doubles per wanted field.
+void parse_ascii_points(std::span<const std::uint8_t> bytes, const PcdHeader& h,
+                        const std::string& name, const std::vector<const PcdField*>& wanted,
+                        Data& data) {
+  const std::size_t n = h.points();
+  const std::size_t available = bytes.size() - h.data_offset;
+  std::vector<std::size_t> token_of;  // token index of each wanted field
+  std::size_t tokens_per_point = 0;
+  for (const auto* f : wanted) {
+    std::size_t t = 0;
+    for (const auto& g : h.fields) {
+      if (&g == f) break;
+      t += static_cast<std::size_t>(g.count);
+    }
+    token_of.push_back(t);
+  }
+  for (const auto& g : h.fields) tokens_per_point += static_cast<std::size_t>(g.count);
+  // Grown line by line rather than sized from POINTS, so a header claiming billions of points
+  // in a small file cannot exhaust memory; every value needs at least two bytes.
+  data.ascii.assign(wanted.size(), {});
+  for (auto& v : data.ascii) v.reserve(std::min(n, available / (2 * tokens_per_point) + 1));
+  std::size_t point = 0;
+  std::size_t line_no = h.header_lines;
+  std::size_t pos = h.data_offset;
+  while (pos < bytes.size()) {
+    std::size_t end = pos;
+    while (end < bytes.size() && bytes[end] != '\n') ++end;
+    ++line_no;
+    const std::string_view line(reinterpret_cast<const char*>(bytes.data()) + pos, end - pos);
+    pos = end + 1;
+    const auto tokens = split_tokens(line);
+    if (tokens.empty()) continue;
+    const std::string where = "line " + std::to_string(line_no);
+    if (point == n) {
+      fail(name, where + ": more point lines than POINTS/WIDTH*HEIGHT = " + std::to_string(n));
+    }
+    if (tokens.size() != tokens_per_point) {
+      fail(name, where + ": expected " + std::to_string(tokens_per_point) + " values, got " +
+                     std::to_string(tokens.size()));
+    }
+    for (std::size_t k = 0; k < wanted.size(); ++k) {
+      // F4 values straight to float: decimal -> double -> float can round twice.
+      const auto v = wanted[k]->type == 'F' && wanted[k]->size == 4
+                         ? parse_float(tokens[token_of[k]])
+                         : parse_double(tokens[token_of[k]]);
+      if (!v) {
+        fail(name, where + ", field '" + wanted[k]->name + "': expected a number, got " +
+                       quoted(tokens[token_of[k]]));
+      }
+      data.ascii[k].push_back(*v);
+    }
+    ++point;
+  }
+  if (point != n) {
+    fail(name, "truncated ascii data: expected " + std::to_string(n) + " point lines, found " +
+                   std::to_string(point));
+  }
+}
+
+std::vector<Column> ascii_columns(std::span<const std::uint8_t> bytes, const PcdHeader& h,
+                                  const std::string& name,
+                                  const std::vector<const PcdField*>& wanted, Data& data) {
+  parse_ascii_points(bytes, h, name, wanted, data);
+  std::vector<Column> columns;
+  for (const auto& v : data.ascii) {
+    columns.push_back({reinterpret_cast<const std::uint8_t*>(v.data()), sizeof(double), 'F', 8});
+  }
+  return columns;
+}
+
+// One column per wanted field, in that order, whatever the encoding; data owns what they point
+// into.
+std::vector<Column> load_columns(std::span<const std::uint8_t> bytes, const PcdHeader& h,
+                                 const std::string& name,
+                                 const std::vector<const PcdField*>& wanted, Data& data) {
+  switch (h.encoding) {
+    case PcdEncoding::kBinary:
+      return binary_columns(bytes, h, name, wanted);
+    case PcdEncoding::kBinaryCompressed:
+      return compressed_columns(bytes, h, name, wanted, data);
+    case PcdEncoding::kAscii:
+      return ascii_columns(bytes, h, name, wanted, data);
+  }
+  return {};
 }
 
 // An unsigned integer value of an integer field (labels, rings), or an error naming the point.
@@ -312,6 +351,156 @@ double wrap_two_pi(double a) {
 
 void append_bytes(std::string& out, const void* p, std::size_t n) {
   out.append(static_cast<const char*>(p), n);
+}
+
+// The fields decode_pcd reads; intensity and label are optional, ring only for unorganized clouds.
+struct ScanFields {
+  const PcdField* x{nullptr};
+  const PcdField* y{nullptr};
+  const PcdField* z{nullptr};
+  const PcdField* intensity{nullptr};
+  const PcdField* label{nullptr};
+  const PcdField* ring{nullptr};
+};
+
+// Finds the fields in the header, and refuses what the scan cannot be built from, naming the
+// fields the file has.
+ScanFields find_scan_fields(const PcdHeader& h, const std::string& name,
+                            const PcdReadOptions& options) {
+  std::string field_list;
+  for (const auto& f : h.fields) field_list += (field_list.empty() ? "" : " ") + f.name;
+  const auto require = [&](const char* field) {
+    const PcdField* f = h.find(field);
+    if (f == nullptr) {
+      fail(name, std::string("missing field '") + field +
+                     "' (expected fields x y z, optionally intensity and label; found " +
+                     field_list + ")");
+    }
+    return f;
+  };
+  const auto single = [&](const PcdField* f) {
+    if (f != nullptr && f->count != 1) {
+      fail(name, "field '" + f->name + "' has COUNT " + std::to_string(f->count) + ", expected 1");
+    }
+    return f;
+  };
+  ScanFields s;
+  s.x = single(require("x"));
+  s.y = single(require("y"));
+  s.z = single(require("z"));
+  s.intensity = single(h.find("intensity"));
+  s.label = single(h.find("label"));
+  if (s.label != nullptr && s.label->type == 'F') {
+    fail(name, "field 'label' has TYPE F, expected an integer type (U or I)");
+  }
+  if (h.height <= 1) {  // unorganized
+    if (options.organize_columns <= 0) {
+      fail(name, "unorganized cloud (HEIGHT 1, WIDTH " + std::to_string(h.width) +
+                     "): expected an organized cloud with HEIGHT = rings and WIDTH = columns");
+    }
+    s.ring = single(h.find(options.ring_field));
+    if (s.ring == nullptr) {
+      fail(name, "unorganized cloud (HEIGHT 1) without a '" + options.ring_field +
+                     "' field: cannot organize it by ring (found " + field_list + ")");
+    }
+  }
+  return s;
+}
+
+// The loaded columns of ScanFields; the optional ones are null when the field is absent.
+struct ScanColumns {
+  const Column& x;
+  const Column& y;
+  const Column& z;
+  const Column* intensity;
+  const Column* label;
+  const Column* ring;
+};
+
+// Row (file row for organized clouds, ring value otherwise) of each point, and the number of
+// rows, to decide the row order before filling the scan.
+std::size_t assign_rows(const PcdHeader& h, const std::string& name, const PcdReadOptions& options,
+                        const ScanFields& fields, const ScanColumns& c,
+                        std::vector<std::uint32_t>& row) {
+  const std::size_t n = h.points();
+  if (h.height > 1) {
+    for (std::size_t i = 0; i < n; ++i) row[i] = static_cast<std::uint32_t>(i / h.width);
+    return h.height;
+  }
+  std::uint32_t max_ring = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    row[i] = integral_value(c.ring->at(i), kMaxRings - 1, name, "'" + fields.ring->name + "'", i);
+    max_ring = std::max(max_ring, row[i]);
+  }
+  const std::size_t rows = options.organize_rings > 0
+                               ? static_cast<std::size_t>(options.organize_rings)
+                               : std::size_t{max_ring} + 1;
+  if (max_ring >= rows) {
+    fail(name, "ring value " + std::to_string(max_ring) + " is outside [0, " +
+                   std::to_string(rows) + ") rings");
+  }
+  return rows;
+}
+
+bool decide_row_flip(PcdRowOrder order, const ScanColumns& c, const std::vector<std::uint32_t>& row,
+                     std::size_t rows) {
+  std::vector<double> elevation_sum(rows, 0.0);
+  std::vector<std::size_t> elevation_count(rows, 0);
+  for (std::size_t i = 0; i < row.size(); ++i) {
+    const double x = c.x.at(i);
+    const double y = c.y.at(i);
+    const double z = c.z.at(i);
+    if (!is_return(x, y, z)) continue;
+    // sin(elevation) orders rows like the elevation itself, without an atan2 per point.
+    elevation_sum[row[i]] += z / std::sqrt(x * x + y * y + z * z);
+    ++elevation_count[row[i]];
+  }
+  return rows_need_flip(order, elevation_sum, elevation_count);
+}
+
+// Puts every point in its cell: organized clouds by file position, unorganized ones by ring and
+// azimuth, keeping the nearer of two points in one cell.
+void fill_scan(const PcdHeader& h, const std::string& name, const ScanColumns& c,
+               const std::vector<std::uint32_t>& row, std::size_t rows, int columns_out,
+               PcdScan& out) {
+  const bool organized = h.height > 1;
+  const double step = kTwoPi / columns_out;
+  const auto ring_of_row = [&](std::size_t r) {
+    return static_cast<int>(out.rows_flipped ? rows - 1 - r : r);
+  };
+  for (std::size_t i = 0; i < row.size(); ++i) {
+    const double x = c.x.at(i);
+    const double y = c.y.at(i);
+    const double z = c.z.at(i);
+    const int ring = ring_of_row(row[i]);
+    const bool hit = is_return(x, y, z);
+    int column = 0;
+    if (organized) {
+      column = static_cast<int>(i % h.width);
+    } else {
+      if (!hit) continue;  // an unorganized cloud's missing returns carry no cell
+      column = std::min(columns_out - 1, static_cast<int>(wrap_two_pi(std::atan2(y, x)) / step));
+    }
+    const std::size_t cell = out.scan.index(ring, column);
+    const Eigen::Vector3f p(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
+    const auto range = static_cast<float>(std::sqrt(x * x + y * y + z * z));
+    if (!organized && out.scan.valid(cell)) {
+      // Dual returns and azimuth jitter put two points in one cell: keep the nearer one.
+      ++out.dropped_points;
+      if (out.scan.range_m(cell) <= range) continue;
+    }
+    if (hit) {
+      double intensity = c.intensity != nullptr ? c.intensity->at(i) : 0.0;
+      if (!std::isfinite(intensity)) intensity = 0.0;
+      out.scan.set_return(ring, column, range, static_cast<float>(intensity), p);
+    } else {
+      out.scan.set_invalid(ring, column, core::ReturnStatus::kNoReturn);
+    }
+    if (c.label != nullptr) {
+      out.labels[cell] = integral_value(c.label->at(i), std::numeric_limits<std::uint32_t>::max(),
+                                        name, "label", i);
+    }
+  }
 }
 
 }  // namespace
@@ -463,137 +652,35 @@ PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::strin
 PcdScan decode_pcd(std::span<const std::uint8_t> bytes, const std::string& name,
                    const PcdReadOptions& options) {
   const PcdHeader h = parse_pcd_header(bytes, name);
-  std::string field_list;
-  for (const auto& f : h.fields) field_list += (field_list.empty() ? "" : " ") + f.name;
-  const auto require = [&](const char* field) {
-    const PcdField* f = h.find(field);
-    if (f == nullptr) {
-      fail(name, std::string("missing field '") + field +
-                     "' (expected fields x y z, optionally intensity and label; found " +
-                     field_list + ")");
-    }
-    return f;
-  };
-  const auto single = [&](const PcdField* f) {
-    if (f != nullptr && f->count != 1) {
-      fail(name, "field '" + f->name + "' has COUNT " + std::to_string(f->count) + ", expected 1");
-    }
-    return f;
-  };
-  const PcdField* fx = single(require("x"));
-  const PcdField* fy = single(require("y"));
-  const PcdField* fz = single(require("z"));
-  const PcdField* fi = single(h.find("intensity"));
-  const PcdField* fl = single(h.find("label"));
-  if (fl != nullptr && fl->type == 'F') {
-    fail(name, "field 'label' has TYPE F, expected an integer type (U or I)");
-  }
-  const bool organized = h.height > 1;
-  const PcdField* fr = nullptr;
-  if (!organized) {
-    if (options.organize_columns <= 0) {
-      fail(name, "unorganized cloud (HEIGHT 1, WIDTH " + std::to_string(h.width) +
-                     "): expected an organized cloud with HEIGHT = rings and WIDTH = columns");
-    }
-    fr = single(h.find(options.ring_field));
-    if (fr == nullptr) {
-      fail(name, "unorganized cloud (HEIGHT 1) without a '" + options.ring_field +
-                     "' field: cannot organize it by ring (found " + field_list + ")");
-    }
-  }
-  std::vector<const PcdField*> wanted{fx, fy, fz};
-  if (fi != nullptr) wanted.push_back(fi);
-  if (fl != nullptr) wanted.push_back(fl);
-  if (fr != nullptr) wanted.push_back(fr);
+  const ScanFields fields = find_scan_fields(h, name, options);
+  std::vector<const PcdField*> wanted{fields.x, fields.y, fields.z};
+  if (fields.intensity != nullptr) wanted.push_back(fields.intensity);
+  if (fields.label != nullptr) wanted.push_back(fields.label);
+  if (fields.ring != nullptr) wanted.push_back(fields.ring);
   Data data;
   const auto columns = load_columns(bytes, h, name, wanted, data);
-  const Column& cx = columns[0];
-  const Column& cy = columns[1];
-  const Column& cz = columns[2];
   std::size_t next = 3;
-  const Column* ci = fi != nullptr ? &columns[next++] : nullptr;
-  const Column* cl = fl != nullptr ? &columns[next++] : nullptr;
-  const Column* cr = fr != nullptr ? &columns[next++] : nullptr;
+  const Column* ci = fields.intensity != nullptr ? &columns[next++] : nullptr;
+  const Column* cl = fields.label != nullptr ? &columns[next++] : nullptr;
+  const Column* cr = fields.ring != nullptr ? &columns[next++] : nullptr;
+  const ScanColumns c{columns[0], columns[1], columns[2], ci, cl, cr};
 
-  const std::size_t n = h.points();
+  const bool organized = h.height > 1;
   PcdScan out;
-  // Row (file row for organized clouds, ring value otherwise) of each point and its elevation,
-  // to decide the row order before filling the scan.
-  std::vector<std::uint32_t> row(n);
-  std::size_t rows = h.height;
-  if (organized) {
-    for (std::size_t i = 0; i < n; ++i) row[i] = static_cast<std::uint32_t>(i / h.width);
-  } else {
-    std::uint32_t max_ring = 0;
-    for (std::size_t i = 0; i < n; ++i) {
-      row[i] = integral_value(cr->at(i), kMaxRings - 1, name, "'" + fr->name + "'", i);
-      max_ring = std::max(max_ring, row[i]);
-    }
-    rows = options.organize_rings > 0 ? static_cast<std::size_t>(options.organize_rings)
-                                      : std::size_t{max_ring} + 1;
-    if (max_ring >= rows) {
-      fail(name, "ring value " + std::to_string(max_ring) + " is outside [0, " +
-                     std::to_string(rows) + ") rings");
-    }
-  }
-  std::vector<double> elevation_sum(rows, 0.0);
-  std::vector<std::size_t> elevation_count(rows, 0);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double x = cx.at(i);
-    const double y = cy.at(i);
-    const double z = cz.at(i);
-    if (!is_return(x, y, z)) continue;
-    // sin(elevation) orders rows like the elevation itself, without an atan2 per point.
-    elevation_sum[row[i]] += z / std::sqrt(x * x + y * y + z * z);
-    ++elevation_count[row[i]];
-  }
-  out.rows_flipped = rows_need_flip(options.row_order, elevation_sum, elevation_count);
-  const auto ring_of_row = [&](std::size_t r) {
-    return static_cast<int>(out.rows_flipped ? rows - 1 - r : r);
-  };
+  std::vector<std::uint32_t> row(h.points());
+  const std::size_t rows = assign_rows(h, name, options, fields, c, row);
+  out.rows_flipped = decide_row_flip(options.row_order, c, row, rows);
 
   const int columns_out = organized ? static_cast<int>(h.width) : options.organize_columns;
   out.scan = core::OrganizedScan(static_cast<int>(rows), columns_out);
   if (cl != nullptr) out.labels.assign(out.scan.size(), 0);
-  const double step = kTwoPi / columns_out;
-  for (std::size_t i = 0; i < n; ++i) {
-    const double x = cx.at(i);
-    const double y = cy.at(i);
-    const double z = cz.at(i);
-    const int ring = ring_of_row(row[i]);
-    const bool hit = is_return(x, y, z);
-    int column = 0;
-    if (organized) {
-      column = static_cast<int>(i % h.width);
-    } else {
-      if (!hit) continue;  // an unorganized cloud's missing returns carry no cell
-      column = std::min(columns_out - 1, static_cast<int>(wrap_two_pi(std::atan2(y, x)) / step));
-    }
-    const std::size_t cell = out.scan.index(ring, column);
-    const Eigen::Vector3f p(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z));
-    const auto range = static_cast<float>(std::sqrt(x * x + y * y + z * z));
-    if (!organized && out.scan.valid(cell)) {
-      // Dual returns and azimuth jitter put two points in one cell: keep the nearer one.
-      ++out.dropped_points;
-      if (out.scan.range_m(cell) <= range) continue;
-    }
-    if (hit) {
-      double intensity = ci != nullptr ? ci->at(i) : 0.0;
-      if (!std::isfinite(intensity)) intensity = 0.0;
-      out.scan.set_return(ring, column, range, static_cast<float>(intensity), p);
-    } else {
-      out.scan.set_invalid(ring, column, core::ReturnStatus::kNoReturn);
-    }
-    if (cl != nullptr) {
-      out.labels[cell] =
-          integral_value(cl->at(i), std::numeric_limits<std::uint32_t>::max(), name, "label", i);
-    }
-  }
+  fill_scan(h, name, c, row, rows, columns_out, out);
   if (organized) {
     estimate_column_azimuths(out.scan);
   } else {
-    for (int c = 0; c < columns_out; ++c) {
-      out.scan.column_azimuth_rad[static_cast<std::size_t>(c)] = (c + 0.5) * step;
+    const double step = kTwoPi / columns_out;
+    for (int col = 0; col < columns_out; ++col) {
+      out.scan.column_azimuth_rad[static_cast<std::size_t>(col)] = (col + 0.5) * step;
     }
   }
   return out;
