@@ -424,14 +424,15 @@ std::vector<double> measure_elevations_deg(const OrganizedScan& scan, const std:
   return out;
 }
 
-SensorModel measure_cloud_sensor(const UnorganizedCloud& cloud, const std::string& name,
-                                 double scan_rate_hz, int columns) {
-  if (!(scan_rate_hz > 0.0 && scan_rate_hz <= 100.0)) {
-    throw ConfigError(name + ": scan rate " + std::to_string(scan_rate_hz) +
-                      " Hz: expected 0..100");
-  }
-  // Elevations seen from the sensor origin. Near points are left out when there are enough far
-  // ones: beam origins a centimetre off the axis smear a ring by a degree at half a metre.
+namespace {
+
+// Histogram of the points' elevations in bins this wide, over -90..90 degrees.
+constexpr double kBinDeg = 0.05;
+constexpr int kBins = static_cast<int>(180.0 / kBinDeg);
+
+// Elevations seen from the sensor origin. Near points are left out when there are enough far
+// ones: beam origins a centimetre off the axis smear a ring by a degree at half a metre.
+std::vector<double> ring_finding_elevations_deg(const UnorganizedCloud& cloud) {
   std::vector<double> near_deg;
   std::vector<double> far_deg;
   for (const auto& p : cloud.xyz) {
@@ -440,17 +441,14 @@ SensorModel measure_cloud_sensor(const UnorganizedCloud& cloud, const std::strin
     const double e = std::atan2(double{p.z()}, h) * kRadToDeg;
     (std::hypot(h, double{p.z()}) >= 2.0 ? far_deg : near_deg).push_back(e);
   }
-  const std::vector<double>& used = far_deg.size() >= 200 ? far_deg : near_deg;
-  if (&used == &near_deg) near_deg.insert(near_deg.end(), far_deg.begin(), far_deg.end());
-  // Histogram of 0.05 degree bins; rings are its peaks that stand above a fiftieth of the
-  // highest, separated by a valley below half the lower one.
-  constexpr double kBinDeg = 0.05;
-  constexpr int kBins = static_cast<int>(180.0 / kBinDeg);
-  std::vector<double> hist(kBins, 0.0);
-  for (double e : used) {
-    const int b = std::clamp(static_cast<int>((e + 90.0) / kBinDeg), 0, kBins - 1);
-    hist[static_cast<std::size_t>(b)] += 1.0;
-  }
+  if (far_deg.size() >= 200) return far_deg;
+  near_deg.insert(near_deg.end(), far_deg.begin(), far_deg.end());
+  return near_deg;
+}
+
+// Rings are the histogram's peaks that stand above a fiftieth of the highest, separated by a
+// valley below half the lower one; of two peaks without such a valley the higher one is kept.
+std::vector<int> elevation_peaks(const std::vector<double>& hist) {
   const double highest = *std::max_element(hist.begin(), hist.end());
   const double threshold = std::max(3.0, 0.02 * highest);
   std::vector<int> peaks;
@@ -471,6 +469,18 @@ SensorModel measure_cloud_sensor(const UnorganizedCloud& cloud, const std::strin
     }
     peaks.push_back(b);
   }
+  return peaks;
+}
+
+// First guess of the rings' elevations: the centroids of the elevation histogram's peaks.
+std::vector<double> histogram_ring_elevations_deg(const UnorganizedCloud& cloud,
+                                                  const std::string& name) {
+  std::vector<double> hist(kBins, 0.0);
+  for (double e : ring_finding_elevations_deg(cloud)) {
+    const int b = std::clamp(static_cast<int>((e + 90.0) / kBinDeg), 0, kBins - 1);
+    hist[static_cast<std::size_t>(b)] += 1.0;
+  }
+  const std::vector<int> peaks = elevation_peaks(hist);
   if (peaks.size() < 2) {
     throw InputError(name + ": cannot measure the ring elevations (" +
                      std::to_string(peaks.size()) +
@@ -496,46 +506,59 @@ SensorModel measure_cloud_sensor(const UnorganizedCloud& cloud, const std::strin
     }
     elevations_deg.push_back(s / w);
   }
+  return elevations_deg;
+}
 
-  if (columns <= 0) {
-    // Neighbouring points of one ring are one column apart unless returns are missing between
-    // them: the median spacing is the column width.
-    SensorModel rings_only = SensorModel::generic(elevations_deg, 8, scan_rate_hz);
-    const auto& el = rings_only.elevation_rad;
-    std::vector<std::vector<double>> azimuths(el.size());
-    for (const auto& p : cloud.xyz) {
-      if (!p.allFinite() || !is_return(p)) continue;
-      const double e = std::atan2(double{p.z()}, std::hypot(double{p.x()}, double{p.y()}));
-      const auto k =
-          static_cast<std::size_t>(std::lower_bound(el.begin(), el.end(), e) - el.begin());
-      std::size_t r = k;
-      if (k == el.size() || (k > 0 && e - el[k - 1] < el[k] - e)) r = k - 1;
-      if (std::abs(e - el[r]) > 0.1 * kDegToRad) continue;
-      azimuths[r].push_back(std::atan2(double{p.y()}, double{p.x()}));
-    }
-    std::vector<double> gaps;
-    for (auto& a : azimuths) {
-      std::sort(a.begin(), a.end());
-      for (std::size_t j = 1; j < a.size(); ++j) {
-        if (a[j] - a[j - 1] > 1e-6) gaps.push_back(a[j] - a[j - 1]);
-      }
-    }
-    if (gaps.size() < 16) {
-      throw InputError(name +
-                       ": cannot measure the column width (too few points per ring); name the "
-                       "sensor with --sensor");
-    }
-    const auto mid = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
-    std::nth_element(gaps.begin(), mid, gaps.end());
-    const long measured = std::lround(kTwoPi / *mid);
-    if (measured > 16'384) {
-      throw InputError(name + ": cannot measure the column width (neighbouring points " +
-                       std::to_string(*mid * kRadToDeg) +
-                       " degrees apart, finer than any spinning LiDAR); name the sensor with "
-                       "--sensor");
-    }
-    columns = static_cast<int>(std::max(measured, 8L));
+// Neighbouring points of one ring are one column apart unless returns are missing between
+// them: the median spacing is the column width.
+int measure_columns(const UnorganizedCloud& cloud, const std::vector<double>& elevations_deg,
+                    double scan_rate_hz, const std::string& name) {
+  SensorModel rings_only = SensorModel::generic(elevations_deg, 8, scan_rate_hz);
+  const auto& el = rings_only.elevation_rad;
+  std::vector<std::vector<double>> azimuths(el.size());
+  for (const auto& p : cloud.xyz) {
+    if (!p.allFinite() || !is_return(p)) continue;
+    const double e = std::atan2(double{p.z()}, std::hypot(double{p.x()}, double{p.y()}));
+    const auto k = static_cast<std::size_t>(std::lower_bound(el.begin(), el.end(), e) - el.begin());
+    std::size_t r = k;
+    if (k == el.size() || (k > 0 && e - el[k - 1] < el[k] - e)) r = k - 1;
+    if (std::abs(e - el[r]) > 0.1 * kDegToRad) continue;
+    azimuths[r].push_back(std::atan2(double{p.y()}, double{p.x()}));
   }
+  std::vector<double> gaps;
+  for (auto& a : azimuths) {
+    std::sort(a.begin(), a.end());
+    for (std::size_t j = 1; j < a.size(); ++j) {
+      if (a[j] - a[j - 1] > 1e-6) gaps.push_back(a[j] - a[j - 1]);
+    }
+  }
+  if (gaps.size() < 16) {
+    throw InputError(name +
+                     ": cannot measure the column width (too few points per ring); name the "
+                     "sensor with --sensor");
+  }
+  const auto mid = gaps.begin() + static_cast<std::ptrdiff_t>(gaps.size() / 2);
+  std::nth_element(gaps.begin(), mid, gaps.end());
+  const long measured = std::lround(kTwoPi / *mid);
+  if (measured > 16'384) {
+    throw InputError(name + ": cannot measure the column width (neighbouring points " +
+                     std::to_string(*mid * kRadToDeg) +
+                     " degrees apart, finer than any spinning LiDAR); name the sensor with "
+                     "--sensor");
+  }
+  return static_cast<int>(std::max(measured, 8L));
+}
+
+}  // namespace
+
+SensorModel measure_cloud_sensor(const UnorganizedCloud& cloud, const std::string& name,
+                                 double scan_rate_hz, int columns) {
+  if (!(scan_rate_hz > 0.0 && scan_rate_hz <= 100.0)) {
+    throw ConfigError(name + ": scan rate " + std::to_string(scan_rate_hz) +
+                      " Hz: expected 0..100");
+  }
+  const std::vector<double> elevations_deg = histogram_ring_elevations_deg(cloud, name);
+  if (columns <= 0) columns = measure_columns(cloud, elevations_deg, scan_rate_hz, name);
   // Refine each ring to the mean elevation of the points it gathers.
   constexpr double kMeasuredMaxRangeM = 200.0;
   SensorModel first_guess =
