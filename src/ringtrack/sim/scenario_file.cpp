@@ -392,7 +392,8 @@ class CsvRow {
 
   [[nodiscard]] const std::string& where() const { return where_; }
 
-  // Cell of column c, or nullptr when the column is absent or the cell empty (optional ones).
+  // Cell of column c, or nullptr when the column is absent or the row ends before it (optional
+  // ones; number() treats an empty optional cell as absent).
   [[nodiscard]] const std::string* cell(int c) const {
     const int i = layout_.column_at[c];
     if (i < 0 || static_cast<std::size_t>(i) >= f_.size()) return nullptr;
