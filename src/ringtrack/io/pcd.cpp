@@ -442,6 +442,7 @@ std::size_t assign_rows(const PcdHeader& h, const std::string& name, const PcdRe
   return rows;
 }
 
+// Each row's elevation from its returns, for rows_need_flip (PcdRowOrder::kAuto reads it).
 bool decide_row_flip(PcdRowOrder order, const ScanColumns& c, const std::vector<std::uint32_t>& row,
                      std::size_t rows) {
   std::vector<double> elevation_sum(rows, 0.0);
