@@ -199,6 +199,8 @@ TEST(VisibilityMotion, BoxesMatchTheNaiveReferenceOverEveryCell) {
   std::mt19937 rng(77);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   int nonempty = 0;
+  int seen_through = 0;
+  int blocked = 0;
   for (int trial = 0; trial < 4; ++trial) {
     Motion motion;
     motion.velocity_mps = {8 * (u(rng) - 0.5), 8 * (u(rng) - 0.5), u(rng) - 0.5};
@@ -219,9 +221,16 @@ TEST(VisibilityMotion, BoxesMatchTheNaiveReferenceOverEveryCell) {
       const VisibilityCounts want = testing::naive_in_box(q, box, 0.1, cells);
       ASSERT_EQ(q.in_box(box, 0.1), want) << "trial " << trial << " box " << b;
       nonempty += want.total() > 0 ? 1 : 0;
+      // seen_through_box stops at the first blocking beam but must say what the counts say.
+      const bool through = want.free > 0 && want.occupied == 0 && want.occluded == 0;
+      ASSERT_EQ(q.seen_through_box(box, 0.1), through) << "trial " << trial << " box " << b;
+      seen_through += through ? 1 : 0;
+      blocked += want.occupied + want.occluded > 0 ? 1 : 0;
     }
   }
   EXPECT_GT(nonempty, 80);
+  EXPECT_GT(seen_through, 10);
+  EXPECT_GT(blocked, 5);  // measured: 9 of 160 boxes (the only surface is the wall)
 }
 
 TEST(VisibilityMotion, AStillSensorOrAScanWithoutTimesUsesTheScanPose) {
