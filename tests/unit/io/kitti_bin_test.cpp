@@ -103,14 +103,20 @@ std::vector<core::OrganizedScan> write_bin_folder(const fs::path& folder) {
   return scans;
 }
 
+// Reading options for the simulator's flattened scans: its columns turn counter-clockwise and all
+// its lasers fire at the column.
+SequenceReadOptions simulated_cloud_options(const core::SensorModel& model) {
+  SequenceReadOptions options;
+  options.sensor = model;
+  options.organizer.clockwise = false;
+  options.organizer.undo_firing_rotation = false;
+  return options;
+}
+
 TEST(KittiBin, FolderRoundTripRecoversTheScans) {
   test::TempDir dir;
   const auto scans = write_bin_folder(dir / "bins");
-  SequenceReadOptions options;
-  options.sensor = core::SensorModel::vlp16();
-  options.organizer.clockwise = false;             // the simulator's columns turn counter-clockwise
-  options.organizer.undo_firing_rotation = false;  // and all its lasers fire at the column
-  SequenceReader reader(dir / "bins", options);
+  SequenceReader reader(dir / "bins", simulated_cloud_options(core::SensorModel::vlp16()));
   EXPECT_FALSE(reader.is_sequence());
   EXPECT_EQ(reader.meta().sensor, "vlp16");
   ASSERT_EQ(reader.size(), 3u);
@@ -155,11 +161,7 @@ TEST(KittiBin, Hdl64eFolderIsOrganizedByTheBuiltInModel) {
     write_kitti_bin(dir / "velodyne" / ("00000" + std::to_string(k) + ".bin"),
                     core::flatten_scan(scans[k]));
   }
-  SequenceReadOptions options;
-  options.sensor = model;
-  options.organizer.clockwise = false;
-  options.organizer.undo_firing_rotation = false;
-  SequenceReader reader(dir / "velodyne", options);
+  SequenceReader reader(dir / "velodyne", simulated_cloud_options(model));
   EXPECT_EQ(reader.meta().sensor, "hdl64e");
   ASSERT_EQ(reader.size(), 2u);
   SequenceScan item;
