@@ -356,6 +356,15 @@ class Schema {
     integer("free_delete_scans", t.free_delete_scans, 0, 1000000,
             "a hypothesis missed in this many consecutive scans that see through its predicted "
             "points is deleted (0 = never)");
+    number("relink_distance_m", t.relink_distance_m, 0.0, 100.0,
+           "identity: a hypothesis confirmed this scan takes over the id (and the dynamic and "
+           "person flags) of a confirmed hypothesis that has moved, was last measured no later "
+           "than its birth and whose position, moved on by its velocity to that birth, lies this "
+           "close horizontally (m): the same object, lost for a few scans and found again; 0 = "
+           "off");
+    number("relink_max_gap_s", t.relink_max_gap_s, 0.0, 1e6,
+           "identity: ... when that hypothesis was last measured at most this long before the "
+           "new one's birth (s)");
 
     auto& m = c.mapping;
     section_ = "mapping";

@@ -28,7 +28,10 @@ struct DetectionSummary {
 
 /// One tracked object.
 struct Hypothesis {
-  std::uint64_t id{0};            ///< unique, from 1, never reused
+  std::uint64_t id{0};  ///< from 1, unique among the live hypotheses; a lost hypothesis' id
+                        ///< continues in the one that took it over (tracking.relink_distance_m)
+  std::int64_t created_ns{0};                               ///< stamp of its first detection
+  Eigen::Vector3d first_position{Eigen::Vector3d::Zero()};  ///< its first detection's centroid
   ConstantVelocityKalman filter;  ///< world-frame position and velocity with covariance
   Eigen::Vector3d velocity_mps{Eigen::Vector3d::Zero()};  ///< reported: 0 up to min speed, capped
   core::Box3 box;          ///< current box: the assigned detection's, else the last one moved
@@ -79,6 +82,7 @@ struct TrackerStats {
   int deleted_merged{0};        ///< younger hypotheses deleted near older ones
   int deleted_seen_through{0};  ///< missed hypotheses whose predicted points the scan saw through
   int relaxed_unassigned{0};    ///< relaxed detections that paired with nothing (no new track)
+  int relinked{0};              ///< confirmed hypotheses that took over a lost one's id
 };
 
 /// Tracks objects from the detections of successive scans.
@@ -144,11 +148,16 @@ class Tracker {
   void decide_report(Hypothesis& h) const;
   void set_reported_position(Hypothesis& h) const;
   void update_person_flag(Hypothesis& h) const;
+  void relink(const std::vector<std::size_t>& newly_confirmed);
+  [[nodiscard]] double relink_distance(const Hypothesis& lost, const Hypothesis& young) const;
+  void forget_lost();
 
   core::TrackingConfig config_;
   double min_speed_mps_;
   double max_speed_mps_;
   std::vector<Hypothesis> hypotheses_;
+  std::vector<Hypothesis> lost_;  // confirmed hypotheses deleted lately: their ids may continue
+  std::vector<std::size_t> newly_confirmed_;    // update(): hypotheses confirmed in this scan
   std::vector<Eigen::Matrix3d> measurement_r_;  // association noise per detection of the update
   std::vector<Eigen::Matrix3d> update_r_;       // Kalman update noise per detection
   std::vector<GaussianTerm> h_terms_, d_terms_;

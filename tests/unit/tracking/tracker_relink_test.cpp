@@ -1,0 +1,170 @@
+// Identity across a short loss (tracking.relink_distance_m): a hypothesis confirmed near where a
+// lost one that had moved was expected takes over its id, on scripted detection streams.
+
+#include <gtest/gtest.h>
+
+#include <set>
+#include <vector>
+
+#include "ringtrack/tracking/tracker.hpp"
+#include "support/scripted_detections.hpp"
+
+namespace ringtrack::tracking {
+namespace {
+
+using testing::person_detection;
+using testing::scan_stamp_ns;
+
+Eigen::Vector3f at(double x, double y) {
+  return {static_cast<float>(x), static_cast<float>(y), 0.0f};
+}
+
+// Feeds one scan's detections (positions of feet; none = nothing detected) and returns the
+// reported ids, checking that no id is reported twice.
+class Runner {
+ public:
+  explicit Runner(const core::TrackingConfig& config) : tracker(config) {}
+
+  void step(const std::vector<Eigen::Vector3f>& feet) {
+    std::vector<core::Detection> detections;
+    for (const auto& f : feet) detections.push_back(person_detection(f, {}));
+    tracker.update(detections, scan_stamp_ns(scan++));
+    std::set<std::uint64_t> ids;
+    for (const auto& h : tracker.hypotheses()) {
+      if (h.reported) {
+        EXPECT_TRUE(ids.insert(h.id).second) << "id " << h.id << " twice";
+      }
+    }
+  }
+
+  // The hypothesis that took detection `index` in the last step (nullptr when none).
+  [[nodiscard]] const Hypothesis* of(int index) const {
+    for (const auto& h : tracker.hypotheses()) {
+      if (h.detection == index) return &h;
+    }
+    return nullptr;
+  }
+  // Its id, 0 when none took it.
+  [[nodiscard]] std::uint64_t id_of(int index) const {
+    const Hypothesis* h = of(index);
+    return h == nullptr ? 0 : h->id;
+  }
+  [[nodiscard]] bool dynamic_of(int index) const {
+    const Hypothesis* h = of(index);
+    return h != nullptr && h->dynamic;
+  }
+
+  Tracker tracker;
+  int scan{0};
+};
+
+core::TrackingConfig relinking(double distance_m) {
+  core::TrackingConfig config;
+  config.relink_distance_m = distance_m;
+  config.relink_max_gap_s = 1.0;
+  return config;
+}
+
+// Walker A goes along x at 1 m/s for 4 s (dynamic by then), is missed for `gap` scans while it
+// turns, and comes back `offset` to the side of where it was going (beyond the gate and the
+// leftover pass). Walker B, 1.6 m away on the side A turns to, is measured throughout: where A
+// comes back, B is nearer than A's expected position, but having been measured since, B is
+// another object and must keep its id. Returns A's reported ids after the gap.
+struct TurnResult {
+  std::uint64_t id_before{0};
+  std::set<std::uint64_t> ids_after;
+  bool dynamic_when_first_reported{false};
+  bool lost_before_return{false};  // A's hypothesis was deleted during the gap
+};
+
+TurnResult walk_turn_and_return(const core::TrackingConfig& config, int gap, double offset) {
+  Runner run(config);
+  TurnResult r;
+  std::uint64_t b_id = 0;
+  const auto b_at = [](int k) { return at(0.1 * k, 1.6); };
+  for (int k = 0; k < 40; ++k) {
+    run.step({at(0.1 * k, 0.0), b_at(k)});
+    if (k == 0) b_id = run.id_of(1);
+    EXPECT_EQ(run.id_of(1), b_id) << "scan " << k;
+  }
+  r.id_before = run.id_of(0);
+  EXPECT_TRUE(run.dynamic_of(0));
+  r.lost_before_return = false;
+  for (int k = 40; k < 40 + gap; ++k) {
+    run.step({b_at(k)});
+    bool alive = false;
+    for (const auto& h : run.tracker.hypotheses()) alive = alive || h.id == r.id_before;
+    r.lost_before_return = r.lost_before_return || !alive;
+    EXPECT_EQ(run.id_of(0), b_id) << "scan " << k;
+  }
+  // Where A would be had it gone on, moved sideways; then it walks on along +y.
+  const double x = 3.9 + 0.1 * gap;
+  for (int j = 0; j < 20; ++j) {
+    run.step({at(x, offset + 0.1 * j), b_at(40 + gap + j)});
+    EXPECT_EQ(run.id_of(1), b_id) << "B, return scan " << j;
+    const Hypothesis* a = run.of(0);
+    if (a == nullptr || !a->reported) continue;
+    if (r.ids_after.empty()) r.dynamic_when_first_reported = a->dynamic;
+    r.ids_after.insert(a->id);
+  }
+  return r;
+}
+
+TEST(TrackerRelink, AWalkerLostInATurnKeepsItsId) {
+  const TurnResult off = walk_turn_and_return(relinking(0.0), 4, 0.9);
+  ASSERT_FALSE(off.ids_after.empty());
+  EXPECT_FALSE(off.ids_after.count(off.id_before))
+      << "without the rule the walker must come back as a new track, or the test shows nothing";
+  EXPECT_FALSE(off.lost_before_return) << "the old hypothesis is still coasting: the live case";
+
+  const TurnResult on = walk_turn_and_return(relinking(1.0), 4, 0.9);
+  EXPECT_EQ(on.ids_after, std::set<std::uint64_t>{on.id_before});
+  EXPECT_TRUE(on.dynamic_when_first_reported) << "it moved before: it moves now";
+}
+
+TEST(TrackerRelink, AWalkerDeletedDuringTheGapKeepsItsId) {
+  core::TrackingConfig config = relinking(1.0);
+  config.delete_eigenvalue_m2 = 0.02;  // deleted within the gap
+  const TurnResult on = walk_turn_and_return(config, 6, 0.7);
+  ASSERT_TRUE(on.lost_before_return) << "the deleted (lost) case";
+  EXPECT_EQ(on.ids_after, std::set<std::uint64_t>{on.id_before});
+  config.relink_distance_m = 0.0;
+  const TurnResult off = walk_turn_and_return(config, 6, 0.7);
+  EXPECT_FALSE(off.ids_after.count(off.id_before));
+}
+
+TEST(TrackerRelink, TooFarOrTooLateIsANewObject) {
+  // 1.4 m beside the expected position: beyond the 1 m reach.
+  const TurnResult far = walk_turn_and_return(relinking(1.0), 4, 1.4);
+  ASSERT_FALSE(far.ids_after.empty());
+  EXPECT_FALSE(far.ids_after.count(far.id_before));
+  // Back after 1.5 s: beyond the 1 s gap (deleted meanwhile, so no plain association either).
+  core::TrackingConfig config = relinking(1.0);
+  config.delete_eigenvalue_m2 = 0.02;
+  const TurnResult late = walk_turn_and_return(config, 15, 0.7);
+  ASSERT_TRUE(late.lost_before_return);
+  ASSERT_FALSE(late.ids_after.empty());
+  EXPECT_FALSE(late.ids_after.count(late.id_before));
+}
+
+// Only what has moved is relinked: a standing object that vanishes and a new one 0.7 m away
+// (a post lost from a moving sensor, a bush beside it) are two objects, whose ids stay apart.
+TEST(TrackerRelink, AStandingObjectsIdIsNeverTakenOver) {
+  Runner run(relinking(1.0));
+  std::uint64_t post = 0;
+  for (int k = 0; k < 20; ++k) {
+    run.step({at(5.0, 0.0)});
+    post = run.id_of(0);
+  }
+  ASSERT_FALSE(run.dynamic_of(0));
+  ASSERT_FALSE(run.tracker.hypotheses().front().ever_dynamic);
+  for (int k = 0; k < 3; ++k) run.step({});
+  for (int k = 0; k < 5; ++k) {
+    run.step({at(5.7, 0.0)});
+    EXPECT_NE(run.id_of(0), post) << "scan " << k;
+  }
+  EXPECT_EQ(run.tracker.stats().relinked, 0);
+}
+
+}  // namespace
+}  // namespace ringtrack::tracking
