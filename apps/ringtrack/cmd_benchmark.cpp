@@ -31,6 +31,7 @@
 #include "ringtrack/experiment/results_json.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/output_file.hpp"
+#include "ringtrack/runner/run.hpp"
 #include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/scenario_file.hpp"
 #include "ringtrack/version.hpp"
@@ -365,7 +366,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
       case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
         const auto k = static_cast<std::uint64_t>(scan.index);
         for (const tracking::Hypothesis& h : r.hypotheses) {
-          if (h.reported) tracks_csv->write(track_row(k, scan.scan.stamp_ns, h, r.origin));
+          if (h.reported) tracks_csv->write(runner::track_row(k, scan.scan.stamp_ns, h, r.origin));
         }
         for (const sim::ObjectTruth& t : scan.objects) {
           objects_csv->write(object_row(k, scan.scan.stamp_ns, t));
