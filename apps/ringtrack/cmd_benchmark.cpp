@@ -440,9 +440,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
       stopped_by.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(stopped_by);
   j["cases"] = nlohmann::ordered_json::array();
   for (const BenchmarkCase& c : cases) j["cases"].push_back(experiment::case_json(c));
-  for (const Aggregate& g : groups) {
-    j["groups"][g.label] = experiment::group_json(g, o.person_figures);
-  }
+  j["groups"] = experiment::groups_json(groups, o.person_figures);
   j["paper"] = nlohmann::ordered_json::array();
   for (const PaperRow& p : kPaper) {
     j["paper"].push_back({{"data", p.data},

@@ -42,6 +42,13 @@ nlohmann::ordered_json metrics_json(const eval::MotSummary& s) {
   };
 }
 
+nlohmann::ordered_json moving_only_json(std::int64_t moving_objects, std::int64_t still_objects,
+                                        const eval::MotSummary& moving_only) {
+  return {{"moving_objects", moving_objects},
+          {"never_moving_objects", still_objects},
+          {"metrics", metrics_json(moving_only)}};
+}
+
 nlohmann::ordered_json map_json(const eval::MapCounts& m) {
   return {{"preservation_rate", number_or_null(m.preservation_rate())},
           {"rejection_rate", number_or_null(m.rejection_rate())},
@@ -61,22 +68,21 @@ nlohmann::ordered_json times_json(const StageSeries& s) {
 }
 
 nlohmann::ordered_json case_json(const BenchmarkCase& c) {
-  nlohmann::ordered_json j = {{"scenario", c.scenario},
-                              {"name", c.name},
-                              {"validation", c.validation},
-                              {"sensor", c.moving ? "moving" : "static"},
-                              {"scans", c.scans},
-                              {"hypotheses_total", c.tracking.hypotheses_total},
-                              {"hypotheses_evaluated", c.tracking.hypotheses_evaluated},
-                              {"metrics", metrics_json(c.tracking.summary)},
-                              {"moving_only",
-                               {{"moving_objects", c.tracking.moving_objects},
-                                {"never_moving_objects", c.tracking.still_objects},
-                                {"metrics", metrics_json(c.tracking.moving_only)}}},
-                              {"map", map_json(c.map)},
-                              {"times", times_json(c.times)},
-                              {"simulate_s", c.simulate_s},
-                              {"pipeline_s", c.pipeline_s}};
+  nlohmann::ordered_json j = {
+      {"scenario", c.scenario},
+      {"name", c.name},
+      {"validation", c.validation},
+      {"sensor", c.moving ? "moving" : "static"},
+      {"scans", c.scans},
+      {"hypotheses_total", c.tracking.hypotheses_total},
+      {"hypotheses_evaluated", c.tracking.hypotheses_evaluated},
+      {"metrics", metrics_json(c.tracking.summary)},
+      {"moving_only", moving_only_json(c.tracking.moving_objects, c.tracking.still_objects,
+                                       c.tracking.moving_only)},
+      {"map", map_json(c.map)},
+      {"times", times_json(c.times)},
+      {"simulate_s", c.simulate_s},
+      {"pipeline_s", c.pipeline_s}};
   if (c.person) {
     j["person_mode"] = {{"hypotheses_evaluated", c.person->hypotheses_evaluated},
                         {"metrics", metrics_json(c.person->summary)}};
@@ -85,18 +91,22 @@ nlohmann::ordered_json case_json(const BenchmarkCase& c) {
 }
 
 nlohmann::ordered_json group_json(const Aggregate& g, bool person_figures) {
-  nlohmann::ordered_json j = {{"scans", g.scans},
-                              {"metrics", metrics_json(g.mot)},
-                              {"moving_only",
-                               {{"moving_objects", g.moving_objects},
-                                {"never_moving_objects", g.never_moving_objects},
-                                {"metrics", metrics_json(g.moving_only)}}},
-                              {"map", map_json(g.map)},
-                              {"times", times_json(g.times)}};
+  nlohmann::ordered_json j = {
+      {"scans", g.scans},
+      {"metrics", metrics_json(g.mot)},
+      {"moving_only", moving_only_json(g.moving_objects, g.never_moving_objects, g.moving_only)},
+      {"map", map_json(g.map)},
+      {"times", times_json(g.times)}};
   if (person_figures) {
     j["person_mode"] = {{"hypotheses_evaluated", g.person_hypotheses},
                         {"metrics", metrics_json(g.person)}};
   }
+  return j;
+}
+
+nlohmann::ordered_json groups_json(const std::vector<Aggregate>& groups, bool person_figures) {
+  nlohmann::ordered_json j = nlohmann::ordered_json::object();
+  for (const Aggregate& g : groups) j[g.label] = group_json(g, person_figures);
   return j;
 }
 
