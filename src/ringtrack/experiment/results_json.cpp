@@ -1,6 +1,12 @@
 #include "ringtrack/experiment/results_json.hpp"
 
 #include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <thread>
+
+#include "ringtrack/version.hpp"
 
 namespace ringtrack::experiment {
 
@@ -108,6 +114,81 @@ nlohmann::ordered_json groups_json(const std::vector<Aggregate>& groups, bool pe
   nlohmann::ordered_json j = nlohmann::ordered_json::object();
   for (const Aggregate& g : groups) j[g.label] = group_json(g, person_figures);
   return j;
+}
+
+namespace {
+
+nlohmann::ordered_json paper_json() {
+  nlohmann::ordered_json j = nlohmann::ordered_json::array();
+  for (const PaperRow& p : kPaperRows) {
+    j.push_back({{"data", p.data},
+                 {"mota", p.mota},
+                 {"motp", p.motp},
+                 {"mostly_tracked_ratio", p.mt},
+                 {"partially_tracked_ratio", p.pt},
+                 {"mostly_lost_ratio", p.ml}});
+  }
+  return j;
+}
+
+}  // namespace
+
+nlohmann::ordered_json results_json(const ResultsHeader& h, const std::vector<BenchmarkCase>& cases,
+                                    const std::vector<Aggregate>& groups, bool person_figures) {
+  nlohmann::ordered_json j;
+  j["ringtrack"] = kVersion;
+  j["date"] = h.date;
+  j["machine"] = h.machine;
+  j["seed"] = h.seed;
+  j["duration_s"] =
+      h.duration_s ? nlohmann::ordered_json(*h.duration_s) : nlohmann::ordered_json(nullptr);
+  j["threshold_m"] = h.threshold_m;
+  j["moving_radius_m"] = h.moving_radius_m;
+  j["wall_s"] = h.wall_s;
+  // Interrupted (Ctrl-C, SIGTERM): the cases and groups cover the runs that finished.
+  j["runs_planned"] = h.runs_planned;
+  j["interrupted"] = h.interrupted.empty() ? nlohmann::ordered_json(nullptr)
+                                           : nlohmann::ordered_json(h.interrupted);
+  j["cases"] = nlohmann::ordered_json::array();
+  for (const BenchmarkCase& c : cases) j["cases"].push_back(case_json(c));
+  j["groups"] = groups_json(groups, person_figures);
+  j["paper"] = paper_json();
+  return j;
+}
+
+std::string timing_rows(const BenchmarkCase& c, const std::string& label) {
+  std::string rows;
+  char buf[256];
+  for (std::size_t k = 0; k < c.times.total.size(); ++k) {
+    std::snprintf(buf, sizeof buf, "%s,%d,%s,%zu,%.4f,%.4f,%.4f,%.4f,%.4f\n", label.c_str(),
+                  c.scenario, c.moving ? "moving" : "static", k, c.times.segmentation[k],
+                  c.times.detection[k], c.times.tracking[k], c.times.mapping[k], c.times.total[k]);
+    rows += buf;
+  }
+  return rows;
+}
+
+std::string machine_description() {
+  std::string model = "unknown CPU";
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpuinfo, line)) {
+    if (line.rfind("model name", 0) == 0) {
+      const auto colon = line.find(':');
+      if (colon != std::string::npos) model = line.substr(colon + 2);
+      break;
+    }
+  }
+  return model + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores";
+}
+
+std::string utc_minute_now() {
+  const std::time_t t = std::time(nullptr);
+  std::tm tm{};
+  gmtime_r(&t, &tm);
+  char buf[64];
+  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M UTC", &tm);
+  return buf;
 }
 
 }  // namespace ringtrack::experiment
