@@ -8,16 +8,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "commands.hpp"
@@ -31,6 +28,7 @@
 #include "ringtrack/experiment/results_json.hpp"
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/io/output_file.hpp"
+#include "ringtrack/runner/run.hpp"
 #include "ringtrack/sim/scenario.hpp"
 #include "ringtrack/sim/scenario_file.hpp"
 #include "ringtrack/version.hpp"
@@ -64,17 +62,6 @@ struct BenchmarkOptions {
   ConfigOptions config;
 };
 
-// The paper's Table II (ICRA 2019), for the report.
-struct PaperRow {
-  const char* data;
-  double mota, motp, mt, pt, ml;
-};
-constexpr PaperRow kPaper[] = {
-    {"simulated, static sensor", 0.677, 0.044, 0.75, 0.25, 0.0},
-    {"simulated, moving sensor", 0.533, 0.033, 0.57, 0.40, 0.03},
-    {"InLiDa (real, indoor; not comparable)", 0.562, 0.108, 0.49, 0.43, 0.08},
-};
-
 struct Goal {
   double static_mota = 0.80, moving_mota = 0.70, motp_m = 0.05, ml_ratio = 0.05;
 };
@@ -89,29 +76,6 @@ std::string fixed(double v, int decimals) {
 std::string case_label(const BenchmarkCase& c) {
   return (c.validation ? std::string("V ") : std::to_string(c.scenario) + " ") + c.name +
          (c.moving ? " (moving)" : " (static)");
-}
-
-std::string machine_description() {
-  std::string model = "unknown CPU";
-  std::ifstream cpuinfo("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpuinfo, line)) {
-    if (line.rfind("model name", 0) == 0) {
-      const auto colon = line.find(':');
-      if (colon != std::string::npos) model = line.substr(colon + 2);
-      break;
-    }
-  }
-  return model + ", " + std::to_string(std::thread::hardware_concurrency()) + " cores";
-}
-
-std::string utc_now() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[64];
-  std::strftime(buf, sizeof buf, "%Y-%m-%d %H:%M UTC", &tm);
-  return buf;
 }
 
 // The tracking cells both accuracy tables share: MOTA to GT.
@@ -145,8 +109,8 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
     md << "**Interrupted by " << stopped_by << " after " << cases.size() << " of " << runs_planned
        << " runs: every figure below covers the finished runs only.**\n\n";
   }
-  md << "- date: " << utc_now() << "\n";
-  md << "- machine: " << machine_description()
+  md << "- date: " << experiment::utc_minute_now() << "\n";
+  md << "- machine: " << experiment::machine_description()
      << " (shared with other processes: times are "
         "indicative)\n";
   md << "- ringtrack " << kVersion << ", seed " << o.seed << ", "
@@ -229,7 +193,7 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
         "the default configuration on ringtrack's simulator, so they are alike in kind, not "
         "identical data.\n\n";
   md << "| data | MOTA | MOTP (m) | MT / PT / ML |\n| --- | ---: | ---: | --- |\n";
-  const auto paper_row = [&](const PaperRow& p) {
+  const auto paper_row = [&](const experiment::PaperRow& p) {
     md << "| paper: " << p.data << " | " << fixed(p.mota, 3) << " | " << fixed(p.motp, 3) << " | "
        << fixed(p.mt, 2) << " / " << fixed(p.pt, 2) << " / " << fixed(p.ml, 2) << " |\n";
   };
@@ -241,14 +205,14 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
   };
   for (const Aggregate& g : groups) {
     if (g.label == "all static") {
-      paper_row(kPaper[0]);
+      paper_row(experiment::kPaperRows[0]);
       our_row(g);
     } else if (g.label == "all moving") {
-      paper_row(kPaper[1]);
+      paper_row(experiment::kPaperRows[1]);
       our_row(g);
     }
   }
-  paper_row(kPaper[2]);
+  paper_row(experiment::kPaperRows[2]);
 
   const Goal goal;
   md << "\nGoal for the defaults (issue 5): MOTA >= " << fixed(goal.static_mota, 2)
@@ -344,8 +308,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   const auto start = std::chrono::steady_clock::now();
   std::vector<BenchmarkCase> cases;
   io::OutputFile timing(out / "timing.csv");
-  timing.write(
-      "case,scenario,sensor,scan,segmentation_ms,detection_ms,tracking_ms,mapping_ms,total_ms\n");
+  timing.write(experiment::kBenchmarkTimingHeader);
   for (const experiment::PlannedRun& run : runs) {
     if (StopSignals::requested()) break;
     const sim::Scenario& s = run.scenario;
@@ -365,7 +328,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
       case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
         const auto k = static_cast<std::uint64_t>(scan.index);
         for (const tracking::Hypothesis& h : r.hypotheses) {
-          if (h.reported) tracks_csv->write(track_row(k, scan.scan.stamp_ns, h, r.origin));
+          if (h.reported) tracks_csv->write(runner::track_row(k, scan.scan.stamp_ns, h, r.origin));
         }
         for (const sim::ObjectTruth& t : scan.objects) {
           objects_csv->write(object_row(k, scan.scan.stamp_ns, t));
@@ -394,17 +357,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
                 << ", simulate " << fixed(c.simulate_s, 1) << " s, pipeline "
                 << fixed(c.pipeline_s, 1) << " s\n";
     }
-    const std::string label = case_label(c);
-    std::string rows;
-    char buf[256];
-    for (std::size_t k = 0; k < c.times.total.size(); ++k) {
-      std::snprintf(buf, sizeof buf, "%s,%d,%s,%zu,%.4f,%.4f,%.4f,%.4f,%.4f\n", label.c_str(),
-                    c.scenario, moving ? "moving" : "static", k, c.times.segmentation[k],
-                    c.times.detection[k], c.times.tracking[k], c.times.mapping[k],
-                    c.times.total[k]);
-      rows += buf;
-    }
-    timing.write(rows);
+    timing.write(experiment::timing_rows(c, case_label(c)));
     cases.push_back(std::move(c));
   }
   timing.close();
@@ -423,34 +376,18 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   io::write_file(out / "report.md", report_markdown(o, cases, groups, wall_s, config_text, plotted,
                                                     runs.size(), stopped_by));
 
-  nlohmann::ordered_json j;
-  j["ringtrack"] = kVersion;
-  j["date"] = utc_now();
-  j["machine"] = machine_description();
-  j["seed"] = o.seed;
-  j["duration_s"] =
-      o.duration_s ? nlohmann::ordered_json(*o.duration_s) : nlohmann::ordered_json(nullptr);
-  j["threshold_m"] = case_options.evaluation.threshold_m;
-  j["moving_radius_m"] = case_options.evaluation.moving_radius_m;
-  j["wall_s"] = wall_s;
-  // Interrupted (Ctrl-C, SIGTERM): the cases and groups cover the runs that finished.
-  j["runs_planned"] = runs.size();
-  j["interrupted"] =
-      stopped_by.empty() ? nlohmann::ordered_json(nullptr) : nlohmann::ordered_json(stopped_by);
-  j["cases"] = nlohmann::ordered_json::array();
-  for (const BenchmarkCase& c : cases) j["cases"].push_back(experiment::case_json(c));
-  for (const Aggregate& g : groups) {
-    j["groups"][g.label] = experiment::group_json(g, o.person_figures);
-  }
-  j["paper"] = nlohmann::ordered_json::array();
-  for (const PaperRow& p : kPaper) {
-    j["paper"].push_back({{"data", p.data},
-                          {"mota", p.mota},
-                          {"motp", p.motp},
-                          {"mostly_tracked_ratio", p.mt},
-                          {"partially_tracked_ratio", p.pt},
-                          {"mostly_lost_ratio", p.ml}});
-  }
+  experiment::ResultsHeader header;
+  header.date = experiment::utc_minute_now();
+  header.machine = experiment::machine_description();
+  header.seed = o.seed;
+  header.duration_s = o.duration_s;
+  header.threshold_m = case_options.evaluation.threshold_m;
+  header.moving_radius_m = case_options.evaluation.moving_radius_m;
+  header.wall_s = wall_s;
+  header.runs_planned = runs.size();
+  header.interrupted = stopped_by;
+  const nlohmann::ordered_json j =
+      experiment::results_json(header, cases, groups, o.person_figures);
   io::write_file(out / "results.json", j.dump(2) + "\n");
   if (o.json) {
     std::cout << j.dump(2) << "\n";

@@ -324,12 +324,6 @@ void print_text(const std::vector<SequenceResult>& sequences, const eval::MotSum
   print_table(sequences, columns, overall_moving, mot);
 }
 
-nlohmann::ordered_json map_json(const eval::MapCounts& m) {
-  return {{"static_points", m.static_points},           {"static_kept", m.static_kept},
-          {"dynamic_points", m.dynamic_points},         {"dynamic_removed", m.dynamic_removed},
-          {"preservation_rate", m.preservation_rate()}, {"rejection_rate", m.rejection_rate()}};
-}
-
 void run_eval(const EvalOptions& o) {
   if (!o.filtered.empty() && o.filtered.size() != o.gt.size()) {
     throw core::InputError("--filtered given " + std::to_string(o.filtered.size()) +
@@ -420,11 +414,10 @@ void run_eval(const EvalOptions& o) {
     }
     j["metrics"] = experiment::metrics_json(s.result.summary);
     if (!mot) {
-      j["moving_only"] = {{"moving_objects", s.result.moving_objects},
-                          {"never_moving_objects", s.result.still_objects},
-                          {"metrics", experiment::metrics_json(s.result.moving_only)}};
+      j["moving_only"] = experiment::moving_only_json(s.result.moving_objects,
+                                                      s.result.still_objects, s.result.moving_only);
     }
-    if (s.map) j["map"] = map_json(*s.map);
+    if (s.map) j["map"] = experiment::map_json(*s.map);
     out["sequences"].push_back(std::move(j));
   }
   out["overall"] = experiment::metrics_json(overall);
@@ -435,11 +428,9 @@ void run_eval(const EvalOptions& o) {
       moving += s.result.moving_objects;
       still += s.result.still_objects;
     }
-    out["overall_moving_only"] = {{"moving_objects", moving},
-                                  {"never_moving_objects", still},
-                                  {"metrics", experiment::metrics_json(overall_moving)}};
+    out["overall_moving_only"] = experiment::moving_only_json(moving, still, overall_moving);
   }
-  if (!o.filtered.empty()) out["overall_map"] = map_json(overall_map);
+  if (!o.filtered.empty()) out["overall_map"] = experiment::map_json(overall_map);
   std::cout << out.dump(2) << "\n";
 }
 

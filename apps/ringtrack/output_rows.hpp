@@ -1,33 +1,13 @@
 #pragma once
-// Conversions from pipeline and simulator results to the rows of tracks.csv and objects.csv,
-// shared by run, simulate and benchmark so the files they write cannot drift apart.
+// The simulator's ground truth as rows of objects.csv (simulate); tracks.csv's rows are
+// runner::track_row's (ringtrack/runner/run.hpp).
 
 #include <cstdint>
 
 #include "ringtrack/io/csv_writers.hpp"
 #include "ringtrack/sim/simulator.hpp"
-#include "ringtrack/tracking/tracker.hpp"
 
 namespace ringtrack::cli {
-
-/// One tracks.csv row: a hypothesis after the update of scan `scan`, moved from the pipeline's
-/// local frame to the world frame by origin (pipeline::Pipeline::origin()).
-inline io::TrackRow track_row(std::uint64_t scan, std::int64_t stamp_ns,
-                              const tracking::Hypothesis& h, const Eigen::Vector3d& origin) {
-  io::TrackRow row;
-  row.scan = scan;
-  row.stamp_ns = stamp_ns;
-  row.id = h.id;
-  row.position = h.reported_position + origin;
-  row.velocity = h.velocity_mps;
-  row.box = core::Box3d::shifted(h.box, origin);
-  row.dynamic = h.dynamic;
-  row.ever_dynamic = h.ever_dynamic;
-  row.age = static_cast<std::uint32_t>(h.age_scans);
-  row.points = static_cast<std::uint32_t>(h.points);
-  row.person = h.person;
-  return row;
-}
 
 /// One objects.csv row: the simulator's ground truth of an object in scan `scan`.
 inline io::ObjectRow object_row(std::uint64_t scan, std::int64_t stamp_ns,

@@ -1,8 +1,8 @@
 """ringtrack: detect and track people in spinning-LiDAR scans and build static maps.
 
 Bindings over the C++ library (docs/python.md): Config, Pipeline, the sources (recordings,
-sequence folders, live UDP), the simulator, evaluation, the benchmark engine and the MCAP writer
-for Foxglove. The tuner is
+sequence folders, live UDP), a whole run (`run`), the simulator, evaluation, the benchmark engine
+and the MCAP writer for Foxglove. The tuner is
 `python3 -m ringtrack.tune` (also `ringtrack tune`).
 """
 
@@ -32,6 +32,7 @@ from ._ringtrack import (  # noqa: F401  (re-exported)
     map_rates,
     open,
     record_runs,
+    run,
     run_case,
     run_cases,
     scenario_files_in,

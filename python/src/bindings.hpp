@@ -38,6 +38,7 @@ py::object to_python(const nlohmann::ordered_json& j);
 void bind_core(py::module_& m);
 void bind_pipeline(py::module_& m);
 void bind_sources(py::module_& m);
+void bind_runner(py::module_& m);
 void bind_sim(py::module_& m);
 void bind_experiment(py::module_& m);
 void bind_mcap(py::module_& m);

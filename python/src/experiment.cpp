@@ -167,10 +167,7 @@ void bind_runs(py::module_& m) {
           j["cases"].push_back(experiment::case_json(cases[i]));
           j["cases"].back()["stem"] = runs[i].stem;
         }
-        j["groups"] = nlohmann::ordered_json::object();
-        for (const experiment::Aggregate& g : experiment::group_cases(cases)) {
-          j["groups"][g.label] = experiment::group_json(g, person_figures);
-        }
+        j["groups"] = experiment::groups_json(experiment::group_cases(cases), person_figures);
         return to_python(j);
       },
       py::arg("runs"), py::arg("config"), py::arg("person_figures") = false,
@@ -198,9 +195,8 @@ void bind_evaluate(py::module_& m) {
         j["hypotheses_total"] = r.hypotheses_total;
         j["hypotheses_evaluated"] = r.hypotheses_evaluated;
         j["metrics"] = experiment::metrics_json(r.summary);
-        j["moving_only"] = {{"moving_objects", r.moving_objects},
-                            {"never_moving_objects", r.still_objects},
-                            {"metrics", experiment::metrics_json(r.moving_only)}};
+        j["moving_only"] =
+            experiment::moving_only_json(r.moving_objects, r.still_objects, r.moving_only);
         return to_python(j);
       },
       py::arg("objects_csv"), py::arg("tracks_csv"), py::arg("threshold_m") = 0.5,

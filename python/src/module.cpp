@@ -42,6 +42,7 @@ PYBIND11_MODULE(_ringtrack, m) {
   bind_core(m);
   bind_pipeline(m);
   bind_sources(m);
+  bind_runner(m);
   bind_sim(m);
   bind_experiment(m);
   bind_mcap(m);

@@ -38,7 +38,8 @@ std::pair<std::int64_t, std::int64_t> column_time_span(const core::OrganizedScan
 }
 
 RunInput::RunInput(const std::string& input, const RunInputOptions& options, SkipHandler on_skip)
-    : source_(io::open_source(input, source_options(input, options))),
+    : name_(input),
+      source_(io::open_source(input, source_options(input, options))),
       reader_(*source_, options.on_bad_scan, std::move(on_skip)),
       poses_(options.poses) {
   sequence_ = source_->sequence();

@@ -47,6 +47,8 @@ class RunInput {
   /// or the option and what was expected.
   RunInput(const std::string& input, const RunInputOptions& options, SkipHandler on_skip = {});
 
+  /// The input as given (for messages).
+  [[nodiscard]] const std::string& name() const { return name_; }
   /// True for a folder of scan files (a recording is anything else).
   [[nodiscard]] bool folder() const { return sequence_ != nullptr; }
   /// The odometry estimates the poses and compensates the motion with its own velocity (when
@@ -87,6 +89,7 @@ class RunInput {
   core::Pose recording_pose(std::size_t index, core::OrganizedScan& scan);
   [[nodiscard]] std::optional<std::size_t> deskew_pair(std::size_t i) const;
 
+  std::string name_;
   std::unique_ptr<io::ScanSource> source_;
   io::ScanReader reader_;
   const io::SequenceReader* sequence_{nullptr};  // the folder behind source_, if it is one

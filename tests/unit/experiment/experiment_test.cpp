@@ -5,6 +5,8 @@
 
 #include <cmath>
 #include <cstring>
+#include <string>
+#include <vector>
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/experiment/aggregate.hpp"
@@ -118,10 +120,9 @@ BenchmarkCase hand_case(bool moving, bool validation, std::int64_t misses, doubl
 }
 
 TEST(Aggregate, GroupsSumBuiltinsAndValidationApart) {
-  const std::vector<BenchmarkCase> cases = {hand_case(false, false, 1, 1.0),
-                                            hand_case(true, false, 2, 2.0),
-                                            hand_case(false, false, 4, 3.0),
-                                            hand_case(false, true, 8, 4.0)};
+  const std::vector<BenchmarkCase> cases = {
+      hand_case(false, false, 1, 1.0), hand_case(true, false, 2, 2.0),
+      hand_case(false, false, 4, 3.0), hand_case(false, true, 8, 4.0)};
   const std::vector<Aggregate> groups = group_cases(cases);
   ASSERT_EQ(groups.size(), 4u);  // no validation moving -> no validation overall
   EXPECT_EQ(groups[0].label, "all static");
@@ -138,6 +139,43 @@ TEST(Aggregate, GroupsSumBuiltinsAndValidationApart) {
   EXPECT_EQ(groups[3].mot.misses, 8);
   EXPECT_EQ(stats_of(groups[2].times.total).max, 3.0);
   EXPECT_EQ(stats_of(groups[2].times.total).median, 2.0);
+}
+
+TEST(ResultsJson, HeaderCasesGroupsAndThePaperInTheirOrder) {
+  std::vector<BenchmarkCase> cases = {hand_case(false, false, 1, 1.0),
+                                      hand_case(true, false, 2, 2.0)};
+  cases[0].scenario = 3;
+  ResultsHeader header;
+  header.date = "2026-01-02 03:04 UTC";
+  header.seed = 7;
+  header.runs_planned = 3;
+  header.interrupted = "SIGINT";
+  const auto j = results_json(header, cases, group_cases(cases), false);
+  std::vector<std::string> keys;
+  for (const auto& item : j.items()) keys.push_back(item.key());
+  EXPECT_EQ(keys,
+            (std::vector<std::string>{"ringtrack", "date", "machine", "seed", "duration_s",
+                                      "threshold_m", "moving_radius_m", "wall_s", "runs_planned",
+                                      "interrupted", "cases", "groups", "paper"}));
+  EXPECT_EQ(j["date"], "2026-01-02 03:04 UTC");
+  EXPECT_TRUE(j["duration_s"].is_null());
+  EXPECT_EQ(j["interrupted"], "SIGINT");
+  ASSERT_EQ(j["cases"].size(), 2u);
+  EXPECT_EQ(j["cases"][0], case_json(cases[0]));
+  EXPECT_EQ(j["groups"]["all moving"]["metrics"]["misses"], 2);
+  ASSERT_EQ(j["paper"].size(), 3u);
+  EXPECT_EQ(j["paper"][1]["mota"], 0.533);
+  header.interrupted.clear();
+  EXPECT_TRUE(results_json(header, cases, group_cases(cases), false)["interrupted"].is_null());
+}
+
+TEST(ResultsJson, TimingRowsAreOnePerScanWithTheCasesLabel) {
+  BenchmarkCase c = hand_case(true, false, 0, 1.5);
+  c.scenario = 4;
+  EXPECT_EQ(timing_rows(c, "4 x (moving)"),
+            "4 x (moving),4,moving,0,0.0000,0.0000,0.0000,0.0000,1.5000\n"
+            "4 x (moving),4,moving,1,0.0000,0.0000,0.0000,0.0000,1.5000\n");
+  EXPECT_EQ(std::string(kBenchmarkTimingHeader).substr(0, 9), "case,scen");
 }
 
 TEST(Plan, BuiltinsRunStaticThenMoving) {
