@@ -126,7 +126,7 @@ struct TrackingConfig {
   int person_min_scans{10};      // strict detections before a confirmed hypothesis is a person
   int free_delete_scans{2};  // missed in this many consecutive scans seeing through its predicted
                              // points: deleted
-  double relink_distance_m{1.5};  // a newly confirmed hypothesis takes the id of one lost this
+  double relink_distance_m{1.0};  // a newly confirmed hypothesis takes the id of one lost this
                                   // close to its birth (extrapolated; 0 = off)
   double relink_max_gap_s{2.0};   // ... when it was last measured at most this long before
 };

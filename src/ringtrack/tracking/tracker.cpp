@@ -478,7 +478,7 @@ double Tracker::relink_distance(const Hypothesis& lost, const Hypothesis& young)
   // Only an object that was not measured after the young one was born can have become it (one
   // measured since is another object beside it), and only within the gap. Measured in the very
   // scan of the birth is allowed: a far body cut into two fragments, the old track took one, the
-  // young one the other and then every later detection (ID switches, all built-ins: 366 -> 333).
+  // young one the other and then every later detection (ID switches, all built-ins: 382 -> 352).
   const std::int64_t gap_ns = young.created_ns - lost.last_detection.stamp_ns;
   if (gap_ns < 0 || static_cast<double>(gap_ns) * 1e-9 > config_.relink_max_gap_s) return kInf;
   if (vertical_gap(lost.last_detection.box, young.initial_box) > config_.relink_distance_m) {
