@@ -70,6 +70,75 @@ void column_motion(const Eigen::AngleAxisd& aa, const Eigen::Vector3d& translati
   translation_out = (s * translation).cast<float>();
 }
 
+// Per-column rotations and translations of one compensation, as columns of a table (twelve
+// arrays of `columns` floats: r00 r01 r02 r10 ... r22 t0 t1 t2), so that the per-cell loop runs
+// along a ring with every coefficient contiguous and SSE2 moves four cells at a time. Columns
+// that do not move get no entry (moves[c] == 0); the loop recomputes them and they are restored.
+struct ColumnTable {
+  std::vector<float> coefficients;  // 12 x columns
+  std::vector<std::uint8_t> moves;
+  [[nodiscard]] const float* row(int k, int columns) const {
+    return coefficients.data() + static_cast<std::size_t>(k) * static_cast<std::size_t>(columns);
+  }
+};
+
+// The table of deskew_constant_velocity(scan, motion, duration): false when it moves nothing.
+bool column_table(const core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
+                  double motion_duration_s, ColumnTable& table) {
+  const int columns = scan.columns();
+  const auto n = static_cast<std::size_t>(columns);
+  table.moves.assign(n, 0);
+  if (!(motion_duration_s > 0) || scan.column_stamp_ns.size() != n) return false;
+  table.coefficients.resize(12 * n);  // every entry is written below (no fill first)
+  const Eigen::AngleAxisd aa(motion.linear());
+  bool any = false;
+  for (std::size_t c = 0; c < n; ++c) {
+    const std::int64_t t = scan.column_stamp_ns[c];
+    if (t == scan.stamp_ns) {
+      // Not moved: zeros keep the loop's arithmetic defined; the caller restores these cells.
+      for (std::size_t k = 0; k < 12; ++k) table.coefficients[k * n + c] = 0.0F;
+      continue;
+    }
+    Eigen::Matrix3f rotation;
+    Eigen::Vector3f translation;
+    column_motion(aa, motion.translation(), column_share(t, scan.stamp_ns, motion_duration_s),
+                  rotation, translation);
+    for (int k = 0; k < 9; ++k)
+      table.coefficients[static_cast<std::size_t>(k) * n + c] = rotation(k / 3, k % 3);
+    for (int k = 0; k < 3; ++k)
+      table.coefficients[static_cast<std::size_t>(9 + k) * n + c] = translation(k);
+    table.moves[c] = 1;
+    any = true;
+  }
+  return any;
+}
+
+// Applies the table to one ring's cells: out = R p + t with the sums as Eigen's 3 x 3 product
+// forms them, m0 p0 + (m1 p1 + m2 p2), then + t (tests compare with deskew_constant_velocity
+// bit for bit). Columns the table does not move are left to the caller.
+void apply_table(const ColumnTable& table, int columns, const float* __restrict xs,
+                 const float* __restrict ys, const float* __restrict zs, float* __restrict ox,
+                 float* __restrict oy, float* __restrict oz) {
+  const float* __restrict r00 = table.row(0, columns);
+  const float* __restrict r01 = table.row(1, columns);
+  const float* __restrict r02 = table.row(2, columns);
+  const float* __restrict r10 = table.row(3, columns);
+  const float* __restrict r11 = table.row(4, columns);
+  const float* __restrict r12 = table.row(5, columns);
+  const float* __restrict r20 = table.row(6, columns);
+  const float* __restrict r21 = table.row(7, columns);
+  const float* __restrict r22 = table.row(8, columns);
+  const float* __restrict t0 = table.row(9, columns);
+  const float* __restrict t1 = table.row(10, columns);
+  const float* __restrict t2 = table.row(11, columns);
+  for (int c = 0; c < columns; ++c) {
+    const float x = xs[c], y = ys[c], z = zs[c];
+    ox[c] = (r00[c] * x + (r01[c] * y + r02[c] * z)) + t0[c];
+    oy[c] = (r10[c] * x + (r11[c] * y + r12[c] * z)) + t1[c];
+    oz[c] = (r20[c] * x + (r21[c] * y + r22[c] * z)) + t2[c];
+  }
+}
+
 }  // namespace
 
 Eigen::Isometry3d scale_motion(const Eigen::Isometry3d& motion, double s) {
@@ -109,63 +178,63 @@ void ScanCompensation::compensate(const core::OrganizedScan& scan, const Eigen::
   const auto& xs = scan.xs();
   const auto& ys = scan.ys();
   const auto& zs = scan.zs();
-  x_.assign(xs.begin(), xs.end());
-  y_.assign(ys.begin(), ys.end());
-  z_.assign(zs.begin(), zs.end());
+  x_.resize(n);
+  y_.resize(n);
+  z_.resize(n);
+  usable_.resize(n);
   const int columns = scan.columns();
-  moved_.assign(static_cast<std::size_t>(columns), 0);
-  if (motion_duration_s > 0 && scan.column_stamp_ns.size() == static_cast<std::size_t>(columns)) {
-    const Eigen::AngleAxisd aa(motion.linear());
-    for (int c = 0; c < columns; ++c) {
-      const std::int64_t t = scan.column_stamp_ns[static_cast<std::size_t>(c)];
-      if (t == scan.stamp_ns) continue;
-      moved_[static_cast<std::size_t>(c)] = 1;
-      Eigen::Matrix3f rotation;
-      Eigen::Vector3f translation;
-      column_motion(aa, motion.translation(), column_share(t, scan.stamp_ns, motion_duration_s),
-                    rotation, translation);
-      for (int r = 0; r < scan.rings(); ++r) {
-        const std::size_t i = scan.index(r, c);
-        if (!scan.valid(i)) continue;
-        const Eigen::Vector3f p = rotation * Eigen::Vector3f(x_[i], y_[i], z_[i]) + translation;
-        x_[i] = p.x();
-        y_[i] = p.y();
-        z_[i] = p.z();
+  const auto width = static_cast<std::size_t>(columns);
+  ColumnTable table;
+  if (column_table(scan, motion, motion_duration_s, table)) {
+    // Ring by ring, every cell (invalid ones hold NaN and stay unread: no branch in the loop),
+    // then the columns that do not move get their points back as measured.
+    for (int r = 0; r < scan.rings(); ++r) {
+      const std::size_t row = scan.index(r, 0);
+      apply_table(table, columns, xs.data() + row, ys.data() + row, zs.data() + row,
+                  x_.data() + row, y_.data() + row, z_.data() + row);
+      for (std::size_t c = 0; c < width; ++c) {
+        if (table.moves[c] != 0) continue;
+        x_[row + c] = xs[row + c];
+        y_[row + c] = ys[row + c];
+        z_[row + c] = zs[row + c];
       }
     }
+  } else {
+    std::copy(xs.begin(), xs.end(), x_.begin());
+    std::copy(ys.begin(), ys.end(), y_.begin());
+    std::copy(zs.begin(), zs.end(), z_.begin());
   }
-  // A setter would have made a non-finite compensated point invalid.
-  usable_.resize(n);
+  moved_ = std::move(table.moves);
+  // A setter would have made a non-finite compensated point invalid. v - v is 0 exactly for a
+  // finite v (NaN otherwise): std::isfinite without a branch.
+  const auto& status = scan.statuses();
   for (std::size_t i = 0; i < n; ++i) {
-    usable_[i] =
-        scan.valid(i) && std::isfinite(x_[i]) && std::isfinite(y_[i]) && std::isfinite(z_[i]);
+    const bool finite =
+        (x_[i] - x_[i]) == 0.0F && (y_[i] - y_[i]) == 0.0F && (z_[i] - z_[i]) == 0.0F;
+    usable_[i] = static_cast<std::uint8_t>(status[i] == core::ReturnStatus::kValid && finite);
   }
 }
 
 void ScanCompensation::write(core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
                              double motion_duration_s) const {
   const int columns = scan.columns();
-  const bool again =
-      motion_duration_s > 0 && scan.column_stamp_ns.size() == static_cast<std::size_t>(columns);
-  const Eigen::AngleAxisd aa(motion.linear());
-  for (int c = 0; c < columns; ++c) {
-    const std::int64_t t = scan.column_stamp_ns.empty()
-                               ? scan.stamp_ns
-                               : scan.column_stamp_ns[static_cast<std::size_t>(c)];
-    const bool second = again && t != scan.stamp_ns;
-    if (!second && moved_[static_cast<std::size_t>(c)] == 0) continue;  // as measured
-    Eigen::Matrix3f rotation = Eigen::Matrix3f::Identity();
-    Eigen::Vector3f translation = Eigen::Vector3f::Zero();
-    if (second) {
-      column_motion(aa, motion.translation(), column_share(t, scan.stamp_ns, motion_duration_s),
-                    rotation, translation);
+  const auto width = static_cast<std::size_t>(columns);
+  ColumnTable table;
+  const bool again = column_table(scan, motion, motion_duration_s, table);
+  std::vector<float> row_x(width), row_y(width), row_z(width);
+  for (int r = 0; r < scan.rings(); ++r) {
+    const std::size_t row = scan.index(r, 0);
+    if (again) {
+      apply_table(table, columns, x_.data() + row, y_.data() + row, z_.data() + row, row_x.data(),
+                  row_y.data(), row_z.data());
     }
-    for (int r = 0; r < scan.rings(); ++r) {
-      const std::size_t i = scan.index(r, c);
+    for (std::size_t c = 0; c < width; ++c) {
+      const bool second = again && table.moves[c] != 0;
+      if (!second && moved_[c] == 0) continue;  // as measured
+      const std::size_t i = row + c;
       if (!scan.valid(i)) continue;
-      const Eigen::Vector3f p = point(i);
-      scan.set_return(r, c, scan.range_m(i), scan.intensity(i),
-                      second ? Eigen::Vector3f(rotation * p + translation) : p);
+      const Eigen::Vector3f p = second ? Eigen::Vector3f(row_x[c], row_y[c], row_z[c]) : point(i);
+      scan.set_return(r, static_cast<int>(c), scan.range_m(i), scan.intensity(i), p);
     }
   }
 }
@@ -229,6 +298,9 @@ void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isome
   const Eigen::Isometry3f to_world = predicted.cast<float>();
   const auto& ranges = scan.ranges();
   for (int r = 0; r < scan.rings(); ++r) {
+    // Neighbouring columns mostly fall into the same frame cube (3.5 cm apart at 10 m): the
+    // key of the last point asked is in the set already, so the hash needs no asking.
+    VoxelKey last_key = ~VoxelKey{0};
     for (int c = 0; c < columns; ++c) {
       const std::size_t i = scan.index(r, c);
       if (!compensation_.usable(i)) continue;
@@ -237,7 +309,10 @@ void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isome
       const Eigen::Vector3f p = compensation_.point(i);
       // The source grid is coarser: a point new to it is new to the finer frame grid too when
       // the edges divide (the defaults), and nearly always otherwise.
-      if (!frame_keys_.insert(voxel_key(p, inv_frame))) continue;
+      const VoxelKey key = voxel_key(p, inv_frame);
+      if (key == last_key) continue;
+      last_key = key;
+      if (!frame_keys_.insert(key)) continue;
       if (!excluded.empty() && inside_any(to_world * p, excluded)) {
         ++result.excluded_points;
         continue;

@@ -53,8 +53,17 @@ VoxelMap::VoxelMap(double voxel_size_m, int max_points_per_voxel)
 
 void VoxelMap::insert(const std::vector<Eigen::Vector3f>& points) {
   const auto size = static_cast<float>(voxel_size_m_);
+  // Consecutive points (neighbours on a ring) mostly share a voxel: its index is kept instead of
+  // asking the table again (indices stay valid while voxels are only added).
+  VoxelKey last_key = kEmptyKey;
+  std::size_t last_index = 0;
   for (const auto& p : points) {
-    auto& voxel = find_or_add(voxel_key(p, inv_voxel_size_));
+    const VoxelKey key = voxel_key(p, inv_voxel_size_);
+    if (key != last_key) {
+      last_index = static_cast<std::size_t>(&find_or_add(key) - voxels_.data());
+      last_key = key;
+    }
+    auto& voxel = voxels_[last_index];
     if (voxel.size() >= max_points_) continue;
     if (voxel.size() == 0) {
       voxel.x.reserve(max_points_);
