@@ -43,8 +43,8 @@ void deskew_constant_velocity(core::OrganizedScan& scan, const Eigen::Isometry3d
 /// deskew_constant_velocity applied twice to a scan, in two steps that write the scan once: the
 /// first compensation goes to own arrays (the odometry selects its points and normals from
 /// them), the second is applied on top when the scan is written. The written scan is bit for bit
-/// what two deskew_constant_velocity calls leave; a scan written through OrganizedScan's setter
-/// twice cost a fifth of the odometry (docs/odometry.md, "Speed").
+/// what two deskew_constant_velocity calls leave, with one setter call per cell instead of two
+/// (docs/odometry.md, "Speed").
 class ScanCompensation {
  public:
   /// Compensates the scan's points as deskew_constant_velocity(scan, motion, motion_duration_s)
