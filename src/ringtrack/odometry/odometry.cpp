@@ -27,18 +27,15 @@ constexpr int kMaxPasses = 3;
 // The first scans enter the map at once: it is too sparse yet to wait for the next pose.
 constexpr std::size_t kEarlyScans = 5;
 
-bool usable(const core::OrganizedScan& scan, std::size_t i) {
-  if (!scan.valid(i)) return false;
-  return std::isfinite(scan.xs()[i]) && std::isfinite(scan.ys()[i]) && std::isfinite(scan.zs()[i]);
-}
-
 bool inside_any(const Eigen::Vector3f& p, std::span<const core::Box3> boxes) {
   return std::any_of(boxes.begin(), boxes.end(), [&](const auto& b) { return b.contains(p); });
 }
 
 // Unit surface normal at a cell from its neighbours on the grid (same ring some columns apart,
-// the next ring in the same column); false at edges, gaps and depth jumps.
-bool grid_normal(const core::OrganizedScan& scan, std::size_t cell, Eigen::Vector3f& normal) {
+// the next ring in the same column), with the points as compensated; false at edges, gaps and
+// depth jumps.
+bool grid_normal(const core::OrganizedScan& scan, const ScanCompensation& points, std::size_t cell,
+                 Eigen::Vector3f& normal) {
   const int ring = scan.ring_of(cell), column = scan.column_of(cell), columns = scan.columns();
   const float range = scan.range_m(cell);
   const float step = range * 2.0F * std::numbers::pi_v<float> / static_cast<float>(columns);
@@ -47,18 +44,99 @@ bool grid_normal(const core::OrganizedScan& scan, std::size_t cell, Eigen::Vecto
   const auto near_cell = [&](int r, int c, std::size_t& out) {
     if (r < 0 || r >= scan.rings()) return false;
     out = scan.index(r, ((c % columns) + columns) % columns);
-    return usable(scan, out) && std::abs(scan.range_m(out) - range) < 0.3F * range;
+    return points.usable(out) && std::abs(scan.range_m(out) - range) < 0.3F * range;
   };
   std::size_t a = 0, b = 0, up = 0;
   if (!near_cell(ring, column - k, a) || !near_cell(ring, column + k, b)) return false;
   if (!near_cell(ring + 1, column, up) && !near_cell(ring - 1, column, up)) return false;
-  const Eigen::Vector3f along = scan.point(b) - scan.point(a);
-  const Eigen::Vector3f across = scan.point(up) - scan.point(cell);
+  const Eigen::Vector3f along = points.point(b) - points.point(a);
+  const Eigen::Vector3f across = points.point(up) - points.point(cell);
   normal = along.cross(across);
   const float norm = normal.norm();
   if (!(norm > 1e-9F)) return false;
   normal /= norm;
   return true;
+}
+
+// Fraction of the motion that compensates a column fired t_ns after the scan stamp.
+double column_share(std::int64_t t_ns, std::int64_t stamp_ns, double motion_duration_s) {
+  return 1e-9 * static_cast<double>(t_ns - stamp_ns) / motion_duration_s;
+}
+
+// The motion scaled by s as the float rotation and translation applied to a column's points.
+void column_motion(const Eigen::AngleAxisd& aa, const Eigen::Vector3d& translation, double s,
+                   Eigen::Matrix3f& rotation_out, Eigen::Vector3f& translation_out) {
+  rotation_out = Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix().cast<float>();
+  translation_out = (s * translation).cast<float>();
+}
+
+// Per-column rotations and translations of one compensation, as columns of a table (twelve
+// arrays of `columns` floats: r00 r01 r02 r10 ... r22 t0 t1 t2), so that the per-cell loop runs
+// along a ring with every coefficient contiguous and SSE2 moves four cells at a time. Columns
+// that do not move get no entry (moves[c] == 0); the loop recomputes them and they are restored.
+struct ColumnTable {
+  std::vector<float> coefficients;  // 12 x columns
+  std::vector<std::uint8_t> moves;
+  [[nodiscard]] const float* row(int k, int columns) const {
+    return coefficients.data() + static_cast<std::size_t>(k) * static_cast<std::size_t>(columns);
+  }
+};
+
+// The table of deskew_constant_velocity(scan, motion, duration): false when it moves nothing.
+bool column_table(const core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
+                  double motion_duration_s, ColumnTable& table) {
+  const int columns = scan.columns();
+  const auto n = static_cast<std::size_t>(columns);
+  table.moves.assign(n, 0);
+  if (!(motion_duration_s > 0) || scan.column_stamp_ns.size() != n) return false;
+  table.coefficients.resize(12 * n);  // every entry is written below (no fill first)
+  const Eigen::AngleAxisd aa(motion.linear());
+  bool any = false;
+  for (std::size_t c = 0; c < n; ++c) {
+    const std::int64_t t = scan.column_stamp_ns[c];
+    if (t == scan.stamp_ns) {
+      // Not moved: zeros keep the loop's arithmetic defined; the caller restores these cells.
+      for (std::size_t k = 0; k < 12; ++k) table.coefficients[k * n + c] = 0.0F;
+      continue;
+    }
+    Eigen::Matrix3f rotation;
+    Eigen::Vector3f translation;
+    column_motion(aa, motion.translation(), column_share(t, scan.stamp_ns, motion_duration_s),
+                  rotation, translation);
+    for (int k = 0; k < 9; ++k)
+      table.coefficients[static_cast<std::size_t>(k) * n + c] = rotation(k / 3, k % 3);
+    for (int k = 0; k < 3; ++k)
+      table.coefficients[static_cast<std::size_t>(9 + k) * n + c] = translation(k);
+    table.moves[c] = 1;
+    any = true;
+  }
+  return any;
+}
+
+// Applies the table to one ring's cells: out = R p + t with the sums as Eigen's 3 x 3 product
+// forms them, m0 p0 + (m1 p1 + m2 p2), then + t (tests compare with deskew_constant_velocity
+// bit for bit). Columns the table does not move are left to the caller.
+void apply_table(const ColumnTable& table, int columns, const float* __restrict xs,
+                 const float* __restrict ys, const float* __restrict zs, float* __restrict ox,
+                 float* __restrict oy, float* __restrict oz) {
+  const float* __restrict r00 = table.row(0, columns);
+  const float* __restrict r01 = table.row(1, columns);
+  const float* __restrict r02 = table.row(2, columns);
+  const float* __restrict r10 = table.row(3, columns);
+  const float* __restrict r11 = table.row(4, columns);
+  const float* __restrict r12 = table.row(5, columns);
+  const float* __restrict r20 = table.row(6, columns);
+  const float* __restrict r21 = table.row(7, columns);
+  const float* __restrict r22 = table.row(8, columns);
+  const float* __restrict t0 = table.row(9, columns);
+  const float* __restrict t1 = table.row(10, columns);
+  const float* __restrict t2 = table.row(11, columns);
+  for (int c = 0; c < columns; ++c) {
+    const float x = xs[c], y = ys[c], z = zs[c];
+    ox[c] = (r00[c] * x + (r01[c] * y + r02[c] * z)) + t0[c];
+    oy[c] = (r10[c] * x + (r11[c] * y + r12[c] * z)) + t1[c];
+    oz[c] = (r20[c] * x + (r21[c] * y + r22[c] * z)) + t2[c];
+  }
 }
 
 }  // namespace
@@ -76,19 +154,87 @@ void deskew_constant_velocity(core::OrganizedScan& scan, const Eigen::Isometry3d
   const int columns = scan.columns();
   if (!(motion_duration_s > 0) || scan.column_stamp_ns.size() != static_cast<std::size_t>(columns))
     return;
+  // The reference of ScanCompensation (tests compare them bit for bit): a setter call per cell.
   const Eigen::AngleAxisd aa(motion.linear());
   for (int c = 0; c < columns; ++c) {
     const std::int64_t t = scan.column_stamp_ns[static_cast<std::size_t>(c)];
     if (t == scan.stamp_ns) continue;
-    const double s = 1e-9 * static_cast<double>(t - scan.stamp_ns) / motion_duration_s;
-    const Eigen::Matrix3f rotation =
-        Eigen::AngleAxisd(aa.angle() * s, aa.axis()).toRotationMatrix().cast<float>();
-    const Eigen::Vector3f translation = (s * motion.translation()).cast<float>();
+    Eigen::Matrix3f rotation;
+    Eigen::Vector3f translation;
+    column_motion(aa, motion.translation(), column_share(t, scan.stamp_ns, motion_duration_s),
+                  rotation, translation);
     for (int r = 0; r < scan.rings(); ++r) {
       const std::size_t i = scan.index(r, c);
       if (!scan.valid(i)) continue;
       scan.set_return(r, c, scan.range_m(i), scan.intensity(i),
                       rotation * scan.point(i) + translation);
+    }
+  }
+}
+
+void ScanCompensation::compensate(const core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
+                                  double motion_duration_s) {
+  const std::size_t n = scan.size();
+  const auto& xs = scan.xs();
+  const auto& ys = scan.ys();
+  const auto& zs = scan.zs();
+  x_.resize(n);
+  y_.resize(n);
+  z_.resize(n);
+  usable_.resize(n);
+  const int columns = scan.columns();
+  const auto width = static_cast<std::size_t>(columns);
+  ColumnTable table;
+  if (column_table(scan, motion, motion_duration_s, table)) {
+    // Ring by ring, every cell (invalid ones hold NaN and stay unread: no branch in the loop),
+    // then the columns that do not move get their points back as measured.
+    for (int r = 0; r < scan.rings(); ++r) {
+      const std::size_t row = scan.index(r, 0);
+      apply_table(table, columns, xs.data() + row, ys.data() + row, zs.data() + row,
+                  x_.data() + row, y_.data() + row, z_.data() + row);
+      for (std::size_t c = 0; c < width; ++c) {
+        if (table.moves[c] != 0) continue;
+        x_[row + c] = xs[row + c];
+        y_[row + c] = ys[row + c];
+        z_[row + c] = zs[row + c];
+      }
+    }
+  } else {
+    std::copy(xs.begin(), xs.end(), x_.begin());
+    std::copy(ys.begin(), ys.end(), y_.begin());
+    std::copy(zs.begin(), zs.end(), z_.begin());
+  }
+  moved_ = std::move(table.moves);
+  // A setter would have made a non-finite compensated point invalid. v - v is 0 exactly for a
+  // finite v (NaN otherwise): std::isfinite without a branch.
+  const auto& status = scan.statuses();
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool finite =
+        (x_[i] - x_[i]) == 0.0F && (y_[i] - y_[i]) == 0.0F && (z_[i] - z_[i]) == 0.0F;
+    usable_[i] = static_cast<std::uint8_t>(status[i] == core::ReturnStatus::kValid && finite);
+  }
+}
+
+void ScanCompensation::write(core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
+                             double motion_duration_s) const {
+  const int columns = scan.columns();
+  const auto width = static_cast<std::size_t>(columns);
+  ColumnTable table;
+  const bool again = column_table(scan, motion, motion_duration_s, table);
+  std::vector<float> row_x(width), row_y(width), row_z(width);
+  for (int r = 0; r < scan.rings(); ++r) {
+    const std::size_t row = scan.index(r, 0);
+    if (again) {
+      apply_table(table, columns, x_.data() + row, y_.data() + row, z_.data() + row, row_x.data(),
+                  row_y.data(), row_z.data());
+    }
+    for (std::size_t c = 0; c < width; ++c) {
+      const bool second = again && table.moves[c] != 0;
+      if (!second && moved_[c] == 0) continue;  // as measured
+      const std::size_t i = row + c;
+      if (!scan.valid(i)) continue;
+      const Eigen::Vector3f p = second ? Eigen::Vector3f(row_x[c], row_y[c], row_z[c]) : point(i);
+      scan.set_return(r, static_cast<int>(c), scan.range_m(i), scan.intensity(i), p);
     }
   }
 }
@@ -137,33 +283,47 @@ void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isome
   source_.clear();
   source_time_s_.clear();
   source_cells_.clear();
-  const bool timed = scan.column_stamp_ns.size() == static_cast<std::size_t>(scan.columns());
+  const int columns = scan.columns();
+  column_time_s_.assign(static_cast<std::size_t>(columns), 0.0F);
+  if (scan.column_stamp_ns.size() == static_cast<std::size_t>(columns)) {
+    for (std::size_t c = 0; c < column_time_s_.size(); ++c) {
+      column_time_s_[c] =
+          static_cast<float>(1e-9 * static_cast<double>(scan.column_stamp_ns[c] - scan.stamp_ns));
+    }
+  }
   frame_keys_.clear(scan.size() / 4);
   source_keys_.clear(scan.size() / 16);
   const auto inv_frame = static_cast<float>(1.0 / config_.map_spacing_m);
   const auto inv_source = static_cast<float>(1.0 / config_.source_voxel_m);
   const Eigen::Isometry3f to_world = predicted.cast<float>();
-  for (std::size_t i = 0; i < scan.size(); ++i) {
-    if (!usable(scan, i)) continue;
-    const float range = scan.range_m(i);
-    if (range < config_.min_range_m || range > config_.max_range_m) continue;
-    const Eigen::Vector3f p = scan.point(i);
-    // The source grid is coarser: a point new to it is new to the finer frame grid too when the
-    // edges divide (the defaults), and nearly always otherwise.
-    if (!frame_keys_.insert(voxel_key(p, inv_frame))) continue;
-    if (!excluded.empty() && inside_any(to_world * p, excluded)) {
-      ++result.excluded_points;
-      continue;
-    }
-    frame_.push_back(p);
-    frame_time_s_.push_back(
-        timed ? static_cast<float>(1e-9 * static_cast<double>(
-                                              scan.column_stamp_ns[scan.column_of(i)] - scan.stamp_ns))
-              : 0.0F);
-    if (source_keys_.insert(voxel_key(p, inv_source))) {
-      source_.push_back(p);
-      source_time_s_.push_back(frame_time_s_.back());
-      source_cells_.push_back(static_cast<std::uint32_t>(i));
+  const auto& ranges = scan.ranges();
+  for (int r = 0; r < scan.rings(); ++r) {
+    // Neighbouring columns mostly fall into the same frame cube (3.5 cm apart at 10 m): the
+    // key of the last point asked is in the set already, so the hash needs no asking.
+    VoxelKey last_key = ~VoxelKey{0};
+    for (int c = 0; c < columns; ++c) {
+      const std::size_t i = scan.index(r, c);
+      if (!compensation_.usable(i)) continue;
+      const float range = ranges[i];
+      if (range < config_.min_range_m || range > config_.max_range_m) continue;
+      const Eigen::Vector3f p = compensation_.point(i);
+      // The source grid is coarser: a point new to it is new to the finer frame grid too when
+      // the edges divide (the defaults), and nearly always otherwise.
+      const VoxelKey key = voxel_key(p, inv_frame);
+      if (key == last_key) continue;
+      last_key = key;
+      if (!frame_keys_.insert(key)) continue;
+      if (!excluded.empty() && inside_any(to_world * p, excluded)) {
+        ++result.excluded_points;
+        continue;
+      }
+      frame_.push_back(p);
+      frame_time_s_.push_back(column_time_s_[static_cast<std::size_t>(c)]);
+      if (source_keys_.insert(voxel_key(p, inv_source))) {
+        source_.push_back(p);
+        source_time_s_.push_back(frame_time_s_.back());
+        source_cells_.push_back(static_cast<std::uint32_t>(i));
+      }
     }
   }
   result.source_points = source_.size();
@@ -173,7 +333,7 @@ void Odometry::compute_normals(const core::OrganizedScan& scan) {
   source_normals_.assign(source_cells_.size(), Eigen::Vector3f::Zero());
   valid_normals_.clear();
   for (std::size_t k = 0; k < source_cells_.size(); ++k) {
-    if (grid_normal(scan, source_cells_[k], source_normals_[k])) {
+    if (grid_normal(scan, compensation_, source_cells_[k], source_normals_[k])) {
       valid_normals_.push_back(source_normals_[k]);
     } else {
       source_normals_[k].setZero();
@@ -187,9 +347,9 @@ void Odometry::insert_pending(const Eigen::Isometry3d& actual, double actual_dt_
     // The pending scan was compensated with the motion known when it was registered; now that
     // the next pose is known, its true motion over its own revolution is: correct to first order
     // (the difference is a fraction of a degree and centimetres).
-    const Eigen::Isometry3d used = pending_used_dt_s_ > 0
-                                       ? scale_motion(pending_used_, actual_dt_s / pending_used_dt_s_)
-                                       : Eigen::Isometry3d::Identity();
+    const Eigen::Isometry3d used =
+        pending_used_dt_s_ > 0 ? scale_motion(pending_used_, actual_dt_s / pending_used_dt_s_)
+                               : Eigen::Isometry3d::Identity();
     const Eigen::Isometry3d correction = actual * used.inverse();
     const Eigen::AngleAxisd aa(correction.linear());
     const Eigen::Vector3f w = (aa.angle() * aa.axis() / actual_dt_s).cast<float>();
@@ -243,11 +403,12 @@ bool Odometry::register_scan(const Eigen::Isometry3d& predicted, int max_iterati
   settings.max_iterations = max_iterations;
   settings.convergence = config_.convergence_m;
   settings.point_to_plane = config_.residual == core::OdometryResidual::kPointToPlane;
-  if (!neighbours_ || neighbours_->max_distance_m() != settings.max_distance_m) {
-    neighbours_.emplace(map_, settings.max_distance_m, source_.size());
+  if (!neighbours_ready_ || neighbours_.max_distance_m() != settings.max_distance_m) {
+    neighbours_.reset(map_, settings.max_distance_m, source_.size());
+    neighbours_ready_ = true;
   }
   const IcpResult icp =
-      register_points(source_, map_, predicted, settings, source_normals_, &*neighbours_);
+      register_points(source_, map_, predicted, settings, source_normals_, &neighbours_);
   result.iterations += icp.iterations;
   result.correspondences = icp.correspondences;
   result.threshold_m = settings.max_distance_m;
@@ -258,8 +419,7 @@ bool Odometry::register_scan(const Eigen::Isometry3d& predicted, int max_iterati
 
 double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate) const {
   const Eigen::Isometry3d change = (last_pose_.inverse() * estimate) * applied_.inverse();
-  return change.translation().norm() +
-         kLeverM * Eigen::AngleAxisd(change.linear()).angle();
+  return change.translation().norm() + kLeverM * Eigen::AngleAxisd(change.linear()).angle();
 }
 
 void Odometry::refine_deskew(const Eigen::Isometry3d& estimate, double dt_s) {
@@ -302,7 +462,7 @@ void Odometry::refine_passes(core::OrganizedScan& scan, double dt_s, bool conver
     result.iterations += again.iterations;
     result.correspondences = again.correspondences;
   }
-  deskew_constant_velocity(scan, applied_ * scan_applied.inverse(), dt_s);
+  compensation_.write(scan, applied_ * scan_applied.inverse(), dt_s);
 }
 
 void Odometry::restart_map(const Eigen::Isometry3d& first_motion, double dt_s) {
@@ -310,7 +470,7 @@ void Odometry::restart_map(const Eigen::Isometry3d& first_motion, double dt_s) {
   // from it compensated with the motion now known, so that the second pass, and every scan after,
   // registers against a consistent start (else its skew stays in the map as a tilt).
   map_.clear();
-  neighbours_.reset();
+  neighbours_ready_ = false;
   const Eigen::AngleAxisd aa(first_motion.linear());
   const Eigen::Vector3f w = (aa.angle() * aa.axis() / dt_s).cast<float>();
   const Eigen::Vector3f v = (first_motion.translation() / dt_s).cast<float>();
@@ -335,10 +495,15 @@ OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core
       scans_ == 0 ? 0.0 : 1e-9 * static_cast<double>(scan.stamp_ns - last_stamp_ns_);
   const Eigen::Isometry3d predicted = scans_ == 0 ? start_ : predict(dt_s);
   applied_ = Eigen::Isometry3d::Identity();
-  neighbours_.reset();  // new points, and the map changed since
-  if (config_.deskew && motion_dt_s_ > 0) {
-    deskew_constant_velocity(scan, motion_, motion_dt_s_);
+  neighbours_ready_ = false;  // new points, and the map changed since
+  // The scan is compensated with the prediction into compensation_, and written once at the end
+  // with what the passes add on top.
+  const bool compensated = config_.deskew && motion_dt_s_ > 0;
+  if (compensated) {
+    compensation_.compensate(scan, motion_, motion_dt_s_);
     applied_ = scale_motion(motion_, dt_s / motion_dt_s_);
+  } else {
+    compensation_.compensate(scan, Eigen::Isometry3d::Identity(), 0.0);
   }
   select_points(scan, predicted, excluded, result);
   compute_normals(scan);
@@ -350,13 +515,18 @@ OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core
     result.registered = !source_.empty();
   } else if (!source_.empty()) {
     // With compensation the first pass only needs to get near: a second one follows.
-    converged = register_scan(predicted, config_.deskew ? kFirstPassIterations : config_.max_iterations,
-                              result, estimate);
+    converged =
+        register_scan(predicted, config_.deskew ? kFirstPassIterations : config_.max_iterations,
+                      result, estimate);
   }
   result.weakest_share = weakest_translation_share(valid_normals_);
   result.degenerate = !result.registered || result.weakest_share < config_.degeneracy_threshold;
   const bool refine = result.registered && config_.deskew && scans_ > 0;
-  if (refine) refine_passes(scan, dt_s, converged, result, estimate);
+  if (refine) {
+    refine_passes(scan, dt_s, converged, result, estimate);
+  } else if (compensated) {
+    compensation_.write(scan, Eigen::Isometry3d::Identity(), 0.0);
+  }
   if (result.registered && scans_ > 0) update_threshold(predicted, estimate);
   // A scan that did not register keeps its prediction but adds nothing to the map.
   if (!result.registered) frame_.clear();

@@ -17,10 +17,10 @@ namespace ringtrack::odometry {
 
 /// What the odometry made of one scan.
 struct OdometryResult {
-  core::Pose pose;         ///< world_T_sensor at scan.stamp_ns (world: see Odometry's start)
-  bool first{false};       ///< the first scan: it defines the world frame and starts the map
-  bool registered{false};  ///< ICP ran on enough correspondences (else pose = prediction)
-  bool degenerate{false};  ///< unreliable: too little geometry, or not registered
+  core::Pose pose;            ///< world_T_sensor at scan.stamp_ns (world: see Odometry's start)
+  bool first{false};          ///< the first scan: it defines the world frame and starts the map
+  bool registered{false};     ///< ICP ran on enough correspondences (else pose = prediction)
+  bool degenerate{false};     ///< unreliable: too little geometry, or not registered
   double weakest_share{0.0};  ///< odometry.degeneracy_threshold compares with this
   int iterations{0};
   std::size_t source_points{0};    ///< scan points registered (after downsampling)
@@ -39,6 +39,32 @@ void deskew_constant_velocity(core::OrganizedScan& scan, const Eigen::Isometry3d
 
 /// The motion scaled by s: rotation angle and translation times s.
 [[nodiscard]] Eigen::Isometry3d scale_motion(const Eigen::Isometry3d& motion, double s);
+
+/// deskew_constant_velocity applied twice to a scan, in two steps that write the scan once: the
+/// first compensation goes to own arrays (the odometry selects its points and normals from
+/// them), the second is applied on top when the scan is written. The written scan is bit for bit
+/// what two deskew_constant_velocity calls leave, with one setter call per cell instead of two
+/// (docs/odometry.md, "Speed").
+class ScanCompensation {
+ public:
+  /// Compensates the scan's points as deskew_constant_velocity(scan, motion, motion_duration_s)
+  /// would, into own arrays (the scan is not changed). A non-positive duration copies them.
+  void compensate(const core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
+                  double motion_duration_s);
+  /// Cell i holds a valid return with finite compensated coordinates.
+  [[nodiscard]] bool usable(std::size_t i) const { return usable_[i] != 0; }
+  /// Compensated point of cell i.
+  [[nodiscard]] Eigen::Vector3f point(std::size_t i) const { return {x_[i], y_[i], z_[i]}; }
+  /// Writes the compensated points into the scan (the one compensate() read), compensated once
+  /// more with `motion` over `motion_duration_s` (a non-positive duration: as they are).
+  void write(core::OrganizedScan& scan, const Eigen::Isometry3d& motion,
+             double motion_duration_s) const;
+
+ private:
+  std::vector<float> x_, y_, z_;
+  std::vector<std::uint8_t> usable_;
+  std::vector<std::uint8_t> moved_;  // per column: the first compensation moved it
+};
 
 /// Scan-to-map odometry with constant-velocity prediction and deskew, adaptive correspondence
 /// threshold, robust point-to-point ICP and a voxel local map cropped around the sensor.
@@ -97,9 +123,11 @@ class Odometry {
   core::OdometryConfig config_;
   Eigen::Isometry3d start_;
   VoxelMap map_;
+  ScanCompensation compensation_;     // this scan's points, compensated with the prediction
+  std::vector<float> column_time_s_;  // per column: its time after the scan stamp
   VoxelKeySet frame_keys_, source_keys_;
   std::vector<Eigen::Vector3f> frame_, source_;
-  std::vector<float> frame_time_s_;  // per frame point: its column's time after the scan stamp
+  std::vector<float> frame_time_s_;   // per frame point: its column's time after the scan stamp
   std::vector<float> source_time_s_;  // the same per source point
   // The last scan's points (sensor frame), held back until the next pose is known.
   std::vector<Eigen::Vector3f> pending_;
@@ -108,15 +136,17 @@ class Odometry {
   std::vector<float> first_time_s_;
   Eigen::Isometry3d pending_pose_{Eigen::Isometry3d::Identity()};
   Eigen::Isometry3d pending_used_{Eigen::Isometry3d::Identity()};  // compensated with this ...
-  double pending_used_dt_s_{0.0};                                   // ... motion over this time
+  double pending_used_dt_s_{0.0};                                  // ... motion over this time
   std::vector<std::uint32_t> source_cells_;
   // Neighbours of the source points, shared by one scan's passes (the map does not change
-  // between them, the points move by millimetres); dropped when the map does.
-  std::optional<NeighbourCache> neighbours_;
+  // between them, the points move by millimetres); reset (memory kept) for every scan and when
+  // the map changes.
+  NeighbourCache neighbours_{map_, 0.0, 0};
+  bool neighbours_ready_{false};
   std::vector<Eigen::Vector3f> source_normals_, valid_normals_;
   Eigen::Isometry3d last_pose_{Eigen::Isometry3d::Identity()};
-  Eigen::Isometry3d motion_{Eigen::Isometry3d::Identity()};  // last scan-to-scan motion
-  double motion_dt_s_{0.0};                                  // ... and its duration
+  Eigen::Isometry3d motion_{Eigen::Isometry3d::Identity()};   // last scan-to-scan motion
+  double motion_dt_s_{0.0};                                   // ... and its duration
   Eigen::Isometry3d applied_{Eigen::Isometry3d::Identity()};  // this scan compensated with this
   std::int64_t last_stamp_ns_{0};
   double error_sse_{0.0};

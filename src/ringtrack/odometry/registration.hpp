@@ -14,7 +14,7 @@ struct IcpSettings {
   double max_distance_m{1.0};  ///< correspondences farther apart are dropped
   double kernel_scale_m{0.3};  ///< Geman-McClure scale: residuals of this size weigh 1/4
   int max_iterations{30};
-  double convergence{1e-4};  ///< stop when a step moves less (m and rad)
+  double convergence{1e-4};    ///< stop when a step moves less (m and rad)
   bool point_to_plane{false};  ///< residual along the point's normal (points without one skipped)
 };
 
@@ -25,6 +25,14 @@ struct IcpResult {
   std::size_t correspondences{0};  ///< in the last iteration
   bool converged{false};
 };
+
+/// Adds one weighted point-to-plane pair to the normal equations: w j j^T to the **lower
+/// triangle** of h (the upper one is left alone) and w residual j to g, with the 1 x 6 Jacobian
+/// j = [n, lever x n]. Each entry is the one the full outer product h += w j j^T forms (tests
+/// compare them bit for bit): 21 products per pair instead of 36.
+void accumulate_point_to_plane(const Eigen::Vector3d& lever, const Eigen::Vector3d& n,
+                               double residual, double w, Eigen::Matrix<double, 6, 6>& h,
+                               Eigen::Matrix<double, 6, 1>& g);
 
 /// Geman-McClure weight of a residual: 1 at 0, 1/4 at the scale, falling as 1/r^4 beyond.
 [[nodiscard]] double geman_mcclure_weight(double residual_m, double scale_m);

@@ -53,8 +53,17 @@ VoxelMap::VoxelMap(double voxel_size_m, int max_points_per_voxel)
 
 void VoxelMap::insert(const std::vector<Eigen::Vector3f>& points) {
   const auto size = static_cast<float>(voxel_size_m_);
+  // Consecutive points (neighbours on a ring) mostly share a voxel: its index is kept instead of
+  // asking the table again (indices stay valid while voxels are only added).
+  VoxelKey last_key = kEmptyKey;
+  std::size_t last_index = 0;
   for (const auto& p : points) {
-    auto& voxel = find_or_add(voxel_key(p, inv_voxel_size_));
+    const VoxelKey key = voxel_key(p, inv_voxel_size_);
+    if (key != last_key) {
+      last_index = static_cast<std::size_t>(&find_or_add(key) - voxels_.data());
+      last_key = key;
+    }
+    auto& voxel = voxels_[last_index];
     if (voxel.size() >= max_points_) continue;
     if (voxel.size() == 0) {
       voxel.x.reserve(max_points_);
@@ -142,13 +151,6 @@ int VoxelMap::candidates(const Eigen::Vector3f& p, double max_distance_m,
   return n;
 }
 
-VoxelKey VoxelMap::block_key(const Eigen::Vector3f& p, double max_distance_m) const {
-  const Eigen::Vector3f q = p * inv_voxel_size_;
-  const float shift = max_distance_m <= 0.5 * voxel_size_m_ ? 0.5F : 0.0F;
-  return pack_voxel(floor_to_int(q.x() - shift), floor_to_int(q.y() - shift),
-                    floor_to_int(q.z() - shift));
-}
-
 bool VoxelMap::nearest(const Eigen::Vector3f& p, double max_distance_m,
                        Eigen::Vector3f& out) const {
   std::array<const Voxel*, 27> voxels{};
@@ -195,12 +197,21 @@ constexpr float kSlackMarginM = 1e-5F;
 }  // namespace
 
 NeighbourCache::NeighbourCache(const VoxelMap& map, double max_distance_m, std::size_t points)
-    : map_(&map),
-      distance2_(map.max_points_per_voxel()),
-      max_distance_m_(max_distance_m),
-      max2_(static_cast<float>(max_distance_m * max_distance_m)),
-      reach_(kReachFactor * static_cast<float>(max_distance_m)),
-      slots_(points) {}
+    : map_(&map), max_distance_m_(0.0), max2_(0.0F), reach_(0.0F) {
+  reset(map, max_distance_m, points);
+}
+
+void NeighbourCache::reset(const VoxelMap& map, double max_distance_m, std::size_t points) {
+  map_ = &map;
+  distance2_.resize(map.max_points_per_voxel());
+  max_distance_m_ = max_distance_m;
+  max2_ = static_cast<float>(max_distance_m * max_distance_m);
+  reach_ = kReachFactor * static_cast<float>(max_distance_m);
+  slots_.resize(points);
+  // An invalid block makes the first query of every slot search; nothing else is read before.
+  for (auto& slot : slots_) slot.block = ~VoxelKey{0};
+  searches_ = 0;
+}
 
 bool NeighbourCache::nearest(std::size_t i, const Eigen::Vector3f& q, Eigen::Vector3f& out) {
   Slot& slot = slots_[i];
@@ -209,20 +220,40 @@ bool NeighbourCache::nearest(std::size_t i, const Eigen::Vector3f& q, Eigen::Vec
     slot.block = block;
     slot.count = map_->candidates(q, max_distance_m_, slot.voxels);
     search(slot, q);
-  } else if (!((q - slot.anchor).squaredNorm() < slot.slack2)) {
+  } else {
+    // The kept candidates' distances now (summed as VoxelMap::nearest sums them, so that the
+    // answer is its answer bit for bit); ties go to the first, nearest at the search.
+    float best2 = std::numeric_limits<float>::infinity();
+    int best = -1;
+    for (int k = 0; k < slot.kept; ++k) {
+      const float d2 = (slot.points[static_cast<std::size_t>(k)] - q).squaredNorm();
+      if (d2 < best2) {
+        best2 = d2;
+        best = k;
+      }
+    }
+    // Every point not kept is at least this far from q now.
+    const float others = slot.bound - (q - slot.anchor).norm();
+    const bool settled = best >= 0 && others > 0 && best2 < others * others;
+    const bool none = others > static_cast<float>(max_distance_m_) && !(best2 <= max2_);
+    if (settled || none) {
+      if (best < 0 || best2 > max2_) return false;
+      out = slot.points[static_cast<std::size_t>(best)];
+      return true;
+    }
     search(slot, q);
   }
-  // The nearest candidate is still slot.nearest; it counts when within the distance.
-  if (!slot.found || (slot.nearest - q).squaredNorm() > max2_) return false;
-  out = slot.nearest;
+  // The kept candidates are sorted: the first is the nearest; it counts when within the distance.
+  if (slot.kept == 0 || (slot.points[0] - q).squaredNorm() > max2_) return false;
+  out = slot.points[0];
   return true;
 }
 
 void NeighbourCache::search(Slot& slot, const Eigen::Vector3f& q) {
   ++searches_;
-  // The two nearest candidates within reach_ (ties go to the first). Voxels are visited nearest
-  // first, so that the runner-up bound soon skips the rest: no point in a voxel farther than it
-  // can change the answer.
+  // The kKept + 1 nearest candidates within reach_ (ties go to the first). Voxels are visited
+  // nearest first, so that the last kept distance soon skips the rest: no point in a voxel
+  // farther than it can change what is kept or the bound.
   std::array<std::pair<float, const VoxelMap::Voxel*>, 27> order;
   const auto n = static_cast<std::size_t>(slot.count);
   for (std::size_t k = 0; k < n; ++k) {
@@ -230,18 +261,20 @@ void NeighbourCache::search(Slot& slot, const Eigen::Vector3f& q) {
   }
   std::sort(order.begin(), order.begin() + static_cast<std::ptrdiff_t>(n),
             [](const auto& a, const auto& b) { return a.first < b.first; });
-  float best = reach_ * reach_, second = best;
-  const VoxelMap::Voxel* best_voxel = nullptr;
-  std::size_t best_point = 0;
+  constexpr int kTop = kKept + 1;
+  std::array<float, kTop> top2;
+  std::array<Eigen::Vector3f, kTop> top;
+  top2.fill(reach_ * reach_);
+  int found = 0;
   float* __restrict dist2 = distance2_.data();
   const float qx = q.x(), qy = q.y(), qz = q.z();
-  for (std::size_t k = 0; k < n && order[k].first <= second; ++k) {
+  for (std::size_t k = 0; k < n && order[k].first <= top2[kTop - 1]; ++k) {
     const VoxelMap::Voxel& voxel = *order[k].second;
     const std::size_t m = voxel.size();
     const float* __restrict xs = voxel.x.data();
     const float* __restrict ys = voxel.y.data();
     const float* __restrict zs = voxel.z.data();
-    // The distances first, in a loop without branches (vectorised), then the two smallest.
+    // The distances first, in a loop without branches (vectorised), then the smallest.
     // Summed as Eigen's squaredNorm() of a 3-vector sums, x + (y + z), so that the answer is
     // bit for bit VoxelMap::nearest's.
     for (std::size_t j = 0; j < m; ++j) {
@@ -249,27 +282,28 @@ void NeighbourCache::search(Slot& slot, const Eigen::Vector3f& q) {
       dist2[j] = dx * dx + (dy * dy + dz * dz);
     }
     for (std::size_t j = 0; j < m; ++j) {
-      if (dist2[j] < best) {
-        second = best;
-        best = dist2[j];
-        best_voxel = &voxel;
-        best_point = j;
-      } else if (dist2[j] < second) {
-        second = dist2[j];
+      const float d2 = dist2[j];
+      if (!(d2 < top2[kTop - 1])) continue;
+      // Insertion into the sorted list: a tie stays behind the earlier point.
+      int pos = kTop - 1;
+      while (pos > 0 && d2 < top2[static_cast<std::size_t>(pos - 1)]) {
+        top2[static_cast<std::size_t>(pos)] = top2[static_cast<std::size_t>(pos - 1)];
+        top[static_cast<std::size_t>(pos)] = top[static_cast<std::size_t>(pos - 1)];
+        --pos;
       }
+      top2[static_cast<std::size_t>(pos)] = d2;
+      top[static_cast<std::size_t>(pos)] = voxel.point(j);
+      found = std::min(found + 1, kTop);
     }
   }
-  const bool found = best_voxel != nullptr;
-  if (found) slot.nearest = best_voxel->point(best_point);
+  slot.kept = std::min(found, kKept);
+  for (int k = 0; k < slot.kept; ++k) {
+    slot.points[static_cast<std::size_t>(k)] = top[static_cast<std::size_t>(k)];
+  }
   slot.anchor = q;
-  const float d1 = std::sqrt(best), d2 = std::sqrt(second);
-  // Found: the nearest stays nearest while q moves less than half the gap to the runner-up (or
-  // to the reach, beyond which no candidate was looked at). None within reach: nothing comes
-  // within the distance while q moves less than reach - distance.
-  const float slack = found ? 0.5F * (d2 - d1) - kSlackMarginM
-                            : d1 - static_cast<float>(max_distance_m_) - kSlackMarginM;
-  slot.slack2 = slack > 0 ? slack * slack : -1.0F;
-  slot.found = found;
+  // The nearest point not kept: the (kKept + 1)-th, or none within reach. Trimmed by the float
+  // rounding of the distances, so that a reused answer is the one a search would give.
+  slot.bound = std::sqrt(top2[kTop - 1]) - kSlackMarginM;
 }
 
 }  // namespace ringtrack::odometry

@@ -91,8 +91,14 @@ class VoxelMap {
   /// it wrote to out (only voxels that exist).
   int candidates(const Eigen::Vector3f& p, double max_distance_m,
                  std::array<const Voxel*, 27>& out) const;
-  /// Key of the block candidates() searches for p (equal keys: equal candidate voxels).
-  [[nodiscard]] VoxelKey block_key(const Eigen::Vector3f& p, double max_distance_m) const;
+  /// Key of the block candidates() searches for p (equal keys: equal candidate voxels). Inline:
+  /// ICP asks it for every point in every iteration.
+  [[nodiscard]] VoxelKey block_key(const Eigen::Vector3f& p, double max_distance_m) const {
+    const Eigen::Vector3f q = p * inv_voxel_size_;
+    const float shift = max_distance_m <= 0.5 * voxel_size_m_ ? 0.5F : 0.0F;
+    return pack_voxel(floor_to_int(q.x() - shift), floor_to_int(q.y() - shift),
+                      floor_to_int(q.z() - shift));
+  }
   /// Nearest map point to p within max_distance_m; false when none.
   bool nearest(const Eigen::Vector3f& p, double max_distance_m, Eigen::Vector3f& out) const;
 
@@ -140,12 +146,22 @@ class VoxelMap {
 /// Nearest map points of a fixed list of query points that move a little between calls (the
 /// source points of one ICP run), against a map that does not change meanwhile. Answers exactly
 /// as VoxelMap::nearest (up to ties), but searches only when needed: each slot remembers where it
-/// last searched, its answer and the gap to the runner-up; while the query has moved less than
-/// half that gap (and its candidate block is the same), the answer stands (triangle inequality).
+/// last searched, the kKept nearest candidates found there and the distance b to the nearest
+/// candidate it did not keep (or the search's reach). A query that moved by d from there, whose
+/// nearest kept candidate lies closer than b - d, has that candidate as its answer: every other
+/// point is at least b - d away (triangle inequality). While its candidate block stays the same,
+/// only the kept candidates' distances are computed.
 class NeighbourCache {
  public:
+  /// Candidates a slot keeps from its last search: more keep answers valid over longer moves on
+  /// dense surfaces (fewer searches), but a search prunes fewer voxels (docs/odometry.md, "Speed").
+  static constexpr int kKept = 3;
+
   /// For `points` query slots, neighbours within max_distance_m (<= one voxel).
   NeighbourCache(const VoxelMap& map, double max_distance_m, std::size_t points);
+  /// Forgets every answer and starts over for this map, distance and number of slots, keeping
+  /// the memory (one cache serves scan after scan without allocating).
+  void reset(const VoxelMap& map, double max_distance_m, std::size_t points);
   /// Nearest map point to q within the distance, for query slot i; false when none.
   bool nearest(std::size_t i, const Eigen::Vector3f& q, Eigen::Vector3f& out);
   /// The distance it answers for, and its number of query slots.
@@ -157,11 +173,11 @@ class NeighbourCache {
  private:
   struct Slot {
     VoxelKey block{~VoxelKey{0}};
-    int count{0};  // candidate voxels
-    bool found{false};
-    float slack2{-1.0F};  // squared distance q may move from anchor with the same answer
-    Eigen::Vector3f anchor{Eigen::Vector3f::Zero()};   // where the last search ran
-    Eigen::Vector3f nearest{Eigen::Vector3f::Zero()};  // what it found (when found)
+    int count{0};       // candidate voxels
+    int kept{0};        // candidates kept, nearest first
+    float bound{0.0F};  // distance from anchor to the nearest point not kept, less a margin
+    Eigen::Vector3f anchor{Eigen::Vector3f::Zero()};  // where the last search ran
+    std::array<Eigen::Vector3f, kKept> points{};      // the kept candidates
     std::array<const VoxelMap::Voxel*, 27> voxels{};
   };
   void search(Slot& slot, const Eigen::Vector3f& q);

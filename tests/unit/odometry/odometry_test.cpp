@@ -132,6 +132,65 @@ TEST(NeighbourCache, MatchesBruteForceWhileQueriesMove) {
   }
 }
 
+// Queries wandering over dense surfaces (planes sampled every 3 cm, as the map holds walls and
+// ground), the case where the runner-up is millimetres away: the cache must give the very point
+// VoxelMap::nearest (the reference search) gives, bit for bit, and still search less.
+TEST(NeighbourCache, GivesTheReferencePointOnDenseSurfaces) {
+  std::vector<Eigen::Vector3f> points;
+  for (int a = 0; a < 100; ++a) {
+    for (int b = 0; b < 100; ++b) {
+      const float u = 0.03F * static_cast<float>(a), v = 0.03F * static_cast<float>(b);
+      points.emplace_back(u, v, 0.0F);         // ground
+      points.emplace_back(u, 1.5F, v * 0.5F);  // a wall
+    }
+  }
+  odometry::VoxelMap map(1.0, 20);
+  map.insert(points);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> u(0.2F, 2.8F);
+  for (double radius : {0.3, 0.5}) {
+    constexpr std::size_t kSlots = 200;
+    odometry::NeighbourCache cache(map, radius, kSlots);
+    std::vector<Eigen::Vector3f> queries(kSlots);
+    for (auto& q : queries) q = {u(rng), u(rng) * 0.6F, u(rng) * 0.1F};
+    std::size_t asked = 0;
+    for (int it = 0; it < 30; ++it) {
+      const float step = it < 3 ? 0.05F : (it < 10 ? 0.003F : 2e-4F);
+      std::normal_distribution<float> n(0.0F, step);
+      for (std::size_t i = 0; i < kSlots; ++i) {
+        queries[i] += Eigen::Vector3f(n(rng), n(rng), n(rng));
+        Eigen::Vector3f expected, found;
+        const bool expected_ok = map.nearest(queries[i], radius, expected);
+        const bool ok = cache.nearest(i, queries[i], found);
+        ++asked;
+        ASSERT_EQ(ok, expected_ok) << "radius " << radius << " iteration " << it << " slot " << i;
+        if (ok) {
+          ASSERT_EQ(found, expected) << "iteration " << it << " slot " << i;
+        }
+      }
+    }
+    EXPECT_LT(cache.searches(), asked / 2) << "radius " << radius;
+  }
+}
+
+// reset() makes a used cache answer as a new one, for another distance and slot count.
+TEST(NeighbourCache, ResetForgetsEveryAnswer) {
+  odometry::VoxelMap first(1.0, 20), second(1.0, 20);
+  first.insert({{0.5F, 0.5F, 0.5F}});
+  second.insert({{0.5F, 0.5F, 0.7F}});
+  odometry::NeighbourCache cache(first, 0.3, 1);
+  Eigen::Vector3f found;
+  ASSERT_TRUE(cache.nearest(0, {0.5F, 0.5F, 0.55F}, found));
+  EXPECT_FLOAT_EQ(found.z(), 0.5F);
+  cache.reset(second, 0.4, 2);
+  EXPECT_EQ(cache.size(), 2U);
+  EXPECT_EQ(cache.max_distance_m(), 0.4);
+  EXPECT_EQ(cache.searches(), 0U);
+  ASSERT_TRUE(cache.nearest(0, {0.5F, 0.5F, 0.55F}, found));
+  EXPECT_FLOAT_EQ(found.z(), 0.7F);
+  EXPECT_TRUE(cache.nearest(1, {0.5F, 0.5F, 0.35F}, found));  // 0.35 m away: within 0.4
+}
+
 // Two map points 0.2 m apart on x: a query walking from one to the other must switch exactly at
 // the bisector, and lose its neighbour beyond the distance.
 TEST(NeighbourCache, SwitchesAtTheBisectorAndDropsBeyondTheDistance) {
@@ -238,6 +297,33 @@ TEST(Registration, WeakestTranslationShareOfAPlaneIsZeroOfABoxAThird) {
   EXPECT_EQ(odometry::weakest_translation_share({}), 0.0);
 }
 
+// The lower-triangle accumulation against the full outer product it replaces (the reference):
+// every entry of the lower triangle, and g, bit for bit.
+TEST(Registration, PointToPlaneAccumulationMatchesTheFullOuterProductBitForBit) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> u(-30.0, 30.0);
+  Eigen::Matrix<double, 6, 6> h = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 6> h_reference = h;
+  Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix<double, 6, 1> g_reference = g;
+  for (int k = 0; k < 2000; ++k) {
+    const Eigen::Vector3d lever(u(rng), u(rng), 0.1 * u(rng));
+    const Eigen::Vector3d n = Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized();
+    const double residual = 0.01 * u(rng);
+    const double w = odometry::geman_mcclure_weight(residual, 0.1);
+    odometry::accumulate_point_to_plane(lever, n, residual, w, h, g);
+    Eigen::Matrix<double, 6, 1> j;
+    j.head<3>() = n;
+    j.tail<3>() = lever.cross(n);
+    h_reference.noalias() += w * j * j.transpose();
+    g_reference.noalias() += (w * residual) * j;
+  }
+  for (int b = 0; b < 6; ++b) {
+    for (int a = b; a < 6; ++a) EXPECT_EQ(h(a, b), h_reference(a, b)) << a << "," << b;
+  }
+  EXPECT_EQ(g, g_reference);
+}
+
 // The same points moved by a known rigid motion: ICP must undo it exactly.
 TEST(Registration, RecoversKnownRigidMotionsOfTheSamePoints) {
   const auto scan = simulate_at("4", {0, 0, 2.5}, {0, 0, 0});
@@ -305,6 +391,60 @@ TEST(OdometryDeskew, UndoesExactPerColumnMotion) {
     worst = std::max(worst, static_cast<double>((scan.point(i) - reference.point(i)).norm()));
   }
   EXPECT_LT(worst, 1e-4);
+}
+
+// ScanCompensation against its reference, deskew_constant_velocity called twice (or once): the
+// written scan must be the same bit for bit, an invalid cell included.
+TEST(OdometryDeskew, ScanCompensationWritesWhatTwoDeskewsWrite) {
+  const auto model = core::SensorModel::vlp16();
+  sim::RenderedScan rendered = sim::render(model, sim::SimpleScene::demo());
+  core::OrganizedScan base = rendered.scan;
+  base.set_uniform_columns(model, 1'000'000'000);
+  base.set_invalid(3, 10, core::ReturnStatus::kNoReturn);
+  Eigen::Isometry3d first = Eigen::Isometry3d::Identity();
+  first.linear() =
+      Eigen::AngleAxisd(5 * kDeg, Eigen::Vector3d(0.2, -0.1, 1).normalized()).toRotationMatrix();
+  first.translation() = Eigen::Vector3d(0.7, 0.2, -0.05);
+  Eigen::Isometry3d second = Eigen::Isometry3d::Identity();
+  second.linear() =
+      Eigen::AngleAxisd(0.3 * kDeg, Eigen::Vector3d(1, 0.5, 0.2).normalized()).toRotationMatrix();
+  second.translation() = Eigen::Vector3d(-0.02, 0.01, 0.004);
+  struct Case {
+    double first_s, second_s;  // durations; 0: that step is not applied
+  };
+  for (const Case& k :
+       {Case{0.1, 0.1}, Case{0.1, 0.0}, Case{0.0, 0.1}, Case{0.0, 0.0}, Case{0.1, 0.05}}) {
+    core::OrganizedScan reference = base;
+    odometry::deskew_constant_velocity(reference, first, k.first_s);
+    odometry::deskew_constant_velocity(reference, second, k.second_s);
+    core::OrganizedScan scan = base;
+    odometry::ScanCompensation compensation;
+    compensation.compensate(scan, first, k.first_s);
+    core::OrganizedScan once = base;
+    odometry::deskew_constant_velocity(once, first, k.first_s);
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      ASSERT_EQ(compensation.usable(i), once.valid(i)) << i;
+      if (once.valid(i)) {
+        ASSERT_EQ(compensation.point(i), once.point(i)) << i;
+      }
+    }
+    for (std::size_t i = 0; i < scan.size(); ++i) {  // not written yet
+      if (base.valid(i)) {
+        ASSERT_EQ(scan.point(i), base.point(i)) << i;
+      }
+    }
+    compensation.write(scan, second, k.second_s);
+    std::size_t compared = 0;
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      ASSERT_EQ(scan.status(i), reference.status(i)) << i;
+      if (!reference.valid(i)) continue;
+      ASSERT_EQ(scan.range_m(i), reference.range_m(i)) << i;
+      ASSERT_EQ(scan.point(i), reference.point(i))
+          << "cell " << i << " case " << k.first_s << "/" << k.second_s;
+      ++compared;
+    }
+    EXPECT_GT(compared, 1000U);
+  }
 }
 
 TEST(OdometryDeskew, ScaleMotionHalvesAngleAndTranslation) {
