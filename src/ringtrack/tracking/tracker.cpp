@@ -424,7 +424,9 @@ void Tracker::delete_uncertain() {
     Hypothesis& h = hypotheses_[j];
     if (doomed(h)) {
       // Its id may yet continue in a hypothesis born near where it was lost (relink()).
-      if (h.confirmed && config_.relink_distance_m > 0.0) lost_.push_back(std::move(h));
+      if (h.confirmed && h.ever_dynamic && config_.relink_distance_m > 0.0) {
+        lost_.push_back(std::move(h));
+      }
     } else {
       if (k != j) hypotheses_[k] = std::move(h);
       ++k;
@@ -492,46 +494,54 @@ double Tracker::relink_distance(const Hypothesis& lost, const Hypothesis& young)
   return d <= config_.relink_distance_m ? d : kInf;
 }
 
+Tracker::RelinkCandidate Tracker::nearest_lost(const Hypothesis& young,
+                                               const std::vector<char>& taken) const {
+  RelinkCandidate best;
+  for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
+    const Hypothesis& h = hypotheses_[i];
+    // Measured in this scan (the young one itself among them) is not lost.
+    if (taken[i] || !h.confirmed || h.detection >= 0) continue;
+    const double d = relink_distance(h, young);
+    if (d < best.distance) best = {d, static_cast<int>(i), -1};
+  }
+  for (std::size_t i = 0; i < lost_.size(); ++i) {
+    const double d = relink_distance(lost_[i], young);
+    if (d < best.distance) best = {d, -1, static_cast<int>(i)};
+  }
+  return best;
+}
+
+void Tracker::take_over(Hypothesis& young, const Hypothesis& old) {
+  young.id = old.id;
+  young.ever_dynamic = young.ever_dynamic || old.ever_dynamic;
+  if (old.dynamic && !young.dynamic) {  // a walker that moved goes on moving
+    young.dynamic = true;
+    young.rest_scans = 0;
+    young.moved_scans = 0;
+  }
+  young.person_scans += old.person_scans;
+  young.person = young.person || old.person;
+  ++stats_.relinked;
+}
+
 void Tracker::relink(const std::vector<std::size_t>& newly_confirmed) {
   // A person lost for a few scans (a turn the filter lagged, a body cut into fragments, a
   // detection the gate rejected) comes back as a new hypothesis; confirmed, it would be a new
   // identity (an identity switch in the evaluation: docs/BENCHMARK.md, issue 10 part 6). Before
   // it is ever reported, it takes over the lost one's id and flags instead. Candidates are the
-  // confirmed hypotheses deleted lately and the live ones coasting since before its birth; the
-  // nearest wins and is then gone.
+  // confirmed hypotheses deleted lately and the live ones coasting since its birth; the nearest
+  // wins and is then gone.
   if (config_.relink_distance_m <= 0.0 || newly_confirmed.empty()) return;
   std::vector<char> taken(hypotheses_.size(), 0);
   for (const std::size_t y : newly_confirmed) {
     Hypothesis& young = hypotheses_[y];
-    double best = kInf;
-    int best_live = -1;
-    int best_lost = -1;
-    for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
-      if (i == y || taken[i] || !hypotheses_[i].confirmed) continue;
-      const double d = relink_distance(hypotheses_[i], young);
-      if (d < best) best = d, best_live = static_cast<int>(i), best_lost = -1;
-    }
-    for (std::size_t i = 0; i < lost_.size(); ++i) {
-      const double d = relink_distance(lost_[i], young);
-      if (d < best) best = d, best_live = -1, best_lost = static_cast<int>(i);
-    }
-    if (best_live < 0 && best_lost < 0) continue;
-    const Hypothesis& old = best_live >= 0 ? hypotheses_[static_cast<std::size_t>(best_live)]
-                                           : lost_[static_cast<std::size_t>(best_lost)];
-    young.id = old.id;
-    young.ever_dynamic = young.ever_dynamic || old.ever_dynamic;
-    if (old.dynamic && !young.dynamic) {
-      young.dynamic = true;
-      young.rest_scans = 0;
-      young.moved_scans = 0;
-    }
-    young.person_scans += old.person_scans;
-    young.person = young.person || old.person;
-    ++stats_.relinked;
-    if (best_live >= 0) {
-      taken[static_cast<std::size_t>(best_live)] = 1;
-    } else {
-      lost_.erase(lost_.begin() + best_lost);
+    const RelinkCandidate best = nearest_lost(young, taken);
+    if (best.live >= 0) {
+      take_over(young, hypotheses_[static_cast<std::size_t>(best.live)]);
+      taken[static_cast<std::size_t>(best.live)] = 1;  // it would only have coasted out
+    } else if (best.lost >= 0) {
+      take_over(young, lost_[static_cast<std::size_t>(best.lost)]);
+      lost_.erase(lost_.begin() + best.lost);
     }
   }
   std::size_t k = 0;

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "ringtrack/core/box3.hpp"
@@ -148,15 +149,25 @@ class Tracker {
   void decide_report(Hypothesis& h) const;
   void set_reported_position(Hypothesis& h) const;
   void update_person_flag(Hypothesis& h) const;
+  /// relink(): the lost hypothesis a newly confirmed one takes over, by index into
+  /// hypotheses_ (live) or lost_ (deleted); both -1 when none is near enough.
+  struct RelinkCandidate {
+    double distance{std::numeric_limits<double>::infinity()};
+    int live{-1};
+    int lost{-1};
+  };
   void relink(const std::vector<std::size_t>& newly_confirmed);
+  [[nodiscard]] RelinkCandidate nearest_lost(const Hypothesis& young,
+                                             const std::vector<char>& taken) const;
   [[nodiscard]] double relink_distance(const Hypothesis& lost, const Hypothesis& young) const;
+  void take_over(Hypothesis& young, const Hypothesis& old);
   void forget_lost();
 
   core::TrackingConfig config_;
   double min_speed_mps_;
   double max_speed_mps_;
   std::vector<Hypothesis> hypotheses_;
-  std::vector<Hypothesis> lost_;  // confirmed hypotheses deleted lately: their ids may continue
+  std::vector<Hypothesis> lost_;  // deleted lately, confirmed and had moved: ids may continue
   std::vector<std::size_t> newly_confirmed_;    // update(): hypotheses confirmed in this scan
   std::vector<Eigen::Matrix3d> measurement_r_;  // association noise per detection of the update
   std::vector<Eigen::Matrix3d> update_r_;       // Kalman update noise per detection
