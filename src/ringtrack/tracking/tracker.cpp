@@ -114,6 +114,20 @@ double pair_cost_terms(const core::TrackingConfig& config, double gate, const Ga
   return kInf;
 }
 
+// Removes the hypotheses whose flag is set, keeping the others' order (creation order, which
+// the merge relies on); returns how many went.
+int remove_flagged(std::vector<Hypothesis>& hypotheses, const std::vector<char>& flagged) {
+  std::size_t k = 0;
+  for (std::size_t j = 0; j < hypotheses.size(); ++j) {
+    if (flagged[j]) continue;
+    if (k != j) hypotheses[k] = std::move(hypotheses[j]);
+    ++k;
+  }
+  const auto removed = static_cast<int>(hypotheses.size() - k);
+  hypotheses.resize(k);
+  return removed;
+}
+
 }  // namespace
 
 Tracker::Tracker(const core::TrackingConfig& config)
@@ -460,16 +474,7 @@ void Tracker::delete_merged() {
       }
     }
   }
-  std::size_t k = 0;
-  for (std::size_t j = 0; j < hypotheses_.size(); ++j) {
-    if (doomed[j]) {
-      ++stats_.deleted_merged;
-    } else {
-      if (k != j) hypotheses_[k] = std::move(hypotheses_[j]);
-      ++k;
-    }
-  }
-  hypotheses_.resize(k);
+  stats_.deleted_merged += remove_flagged(hypotheses_, doomed);
 }
 
 double Tracker::relink_distance(const Hypothesis& lost, const Hypothesis& young) const {
@@ -544,13 +549,7 @@ void Tracker::relink(const std::vector<std::size_t>& newly_confirmed) {
       lost_.erase(lost_.begin() + best.lost);
     }
   }
-  std::size_t k = 0;
-  for (std::size_t j = 0; j < hypotheses_.size(); ++j) {
-    if (taken[j]) continue;
-    if (k != j) hypotheses_[k] = std::move(hypotheses_[j]);
-    ++k;
-  }
-  hypotheses_.resize(k);
+  remove_flagged(hypotheses_, taken);
 }
 
 void Tracker::forget_lost() {
