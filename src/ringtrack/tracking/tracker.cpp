@@ -128,6 +128,13 @@ int remove_flagged(std::vector<Hypothesis>& hypotheses, const std::vector<char>&
   return removed;
 }
 
+// A deleted hypothesis that was confirmed and had moved is kept aside: its id may yet continue
+// in a hypothesis born near where it was lost (Tracker::relink).
+void keep_if_lost(Hypothesis& h, const core::TrackingConfig& config,
+                  std::vector<Hypothesis>& lost) {
+  if (h.confirmed && h.ever_dynamic && config.relink_distance_m > 0.0) lost.push_back(std::move(h));
+}
+
 }  // namespace
 
 Tracker::Tracker(const core::TrackingConfig& config)
@@ -437,10 +444,7 @@ void Tracker::delete_uncertain() {
   for (std::size_t j = 0; j < hypotheses_.size(); ++j) {
     Hypothesis& h = hypotheses_[j];
     if (doomed(h)) {
-      // Its id may yet continue in a hypothesis born near where it was lost (relink()).
-      if (h.confirmed && h.ever_dynamic && config_.relink_distance_m > 0.0) {
-        lost_.push_back(std::move(h));
-      }
+      keep_if_lost(h, config_, lost_);
     } else {
       if (k != j) hypotheses_[k] = std::move(h);
       ++k;
@@ -457,6 +461,8 @@ void Tracker::delete_merged() {
   // took the person's hits in turns (an identity switch each time; docs/tracking.md, "Merging").
   const double few_point_reach = std::max(r, config_.few_point_merge_distance_m);
   if (few_point_reach <= 0.0) return;
+  constexpr char kMerged = 1;          // within merge_distance_m
+  constexpr char kFewPointMerged = 2;  // within few_point_merge_distance_m only
   std::vector<char> doomed(hypotheses_.size(), 0);
   for (std::size_t j = 1; j < hypotheses_.size(); ++j) {
     const auto& young = hypotheses_[j];
@@ -464,15 +470,22 @@ void Tracker::delete_merged() {
       if (doomed[i]) continue;
       const auto& old = hypotheses_[i];
       const double horizontal = (young.position() - old.position()).head<2>().norm();
-      const double reach =
-          young.last_detection.points <= kFewPoints && old.last_detection.points <= kFewPoints
-              ? few_point_reach
-              : r;
+      const bool few_points =
+          young.last_detection.points <= kFewPoints && old.last_detection.points <= kFewPoints;
+      const double reach = few_points ? few_point_reach : r;
       if (horizontal < reach && vertical_gap(young.box, old.box) < reach) {
-        doomed[j] = 1;
+        doomed[j] = few_points ? kFewPointMerged : kMerged;
         break;
       }
     }
+  }
+  // Two people crossing are one cluster for a scan or two: the older track takes it, the other
+  // coasts into it and is merged away. When they part, the other person would come back as a
+  // new identity; kept as lost, it continues the old one (relink()). Not so for two few-point
+  // tracks on one far person: kept, the duplicate's id came back on the person's next stray hit
+  // and the two ids alternated (validation far field, moving sensor: 27 -> 46 switches).
+  for (std::size_t j = 0; j < hypotheses_.size(); ++j) {
+    if (doomed[j] == kMerged) keep_if_lost(hypotheses_[j], config_, lost_);
   }
   stats_.deleted_merged += remove_flagged(hypotheses_, doomed);
 }

@@ -166,5 +166,44 @@ TEST(TrackerRelink, AStandingObjectsIdIsNeverTakenOver) {
   EXPECT_EQ(run.tracker.stats().relinked, 0);
 }
 
+// Two walkers crossing are one cluster for a few scans: the older track takes it, the younger
+// coasts into it and is merged away (merge_distance_m). When they part, the younger walker
+// keeps its id: the merged-away hypothesis is kept as lost like a deleted one.
+std::set<std::uint64_t> ids_after_crossing(double relink_distance_m, std::uint64_t& b_before,
+                                           int& merged) {
+  Runner run(relinking(relink_distance_m));
+  const auto a_at = [](int k) { return at(0.1 * k - 4.0, 0.0); };
+  const auto b_at = [](int k) { return at(0.0, 0.1 * k - 4.0); };
+  run.step({a_at(0)});
+  for (int k = 1; k < 38; ++k) run.step({a_at(k), b_at(k)});
+  b_before = run.id_of(1);
+  EXPECT_TRUE(run.dynamic_of(0) && run.dynamic_of(1));
+  merged = 0;  // the stats are per scan
+  for (int k = 38; k < 43; ++k) {
+    run.step({(a_at(k) + b_at(k)) / 2.0f});
+    merged += run.tracker.stats().deleted_merged;
+  }
+  std::set<std::uint64_t> ids;
+  for (int k = 43; k < 60; ++k) {
+    run.step({a_at(k), b_at(k)});
+    const Hypothesis* b = run.of(1);
+    if (b != nullptr && b->reported) ids.insert(b->id);
+  }
+  return ids;
+}
+
+TEST(TrackerRelink, AWalkerMergedAwayWhileCrossingKeepsItsId) {
+  std::uint64_t b_before = 0;
+  int merged = 0;
+  const std::set<std::uint64_t> off = ids_after_crossing(0.0, b_before, merged);
+  ASSERT_GE(merged, 1)
+      << "the crossing must merge the younger track away, or the test shows nothing";
+  ASSERT_FALSE(off.empty());
+  EXPECT_FALSE(off.count(b_before)) << "without the rule it comes back as a new track";
+  const std::set<std::uint64_t> on = ids_after_crossing(1.0, b_before, merged);
+  ASSERT_GE(merged, 1);
+  EXPECT_EQ(on, std::set<std::uint64_t>{b_before});
+}
+
 }  // namespace
 }  // namespace ringtrack::tracking
