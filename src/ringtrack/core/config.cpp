@@ -383,6 +383,13 @@ class Schema {
            "and upward (not downward: the ground under its feet) and every point inside leaves "
            "that scan, segmented or not (a head above the cluster, an arm beside it); 0 removes "
            "only its detection's cells (m)");
+    number("object_ground_clearance_m", m.object_ground_clearance_m, 0.0, 10.0,
+           "that grown box also reaches down to this height above the ground around it (the "
+           "lowest point of the scan within 1 m of its footprint): the legs below the cluster "
+           "leave, the ground stays; 0 = not downward (m)");
+    number("object_min_height_m", m.object_min_height_m, 0.0, 10.0,
+           "and up to at least this height above that ground: the head of a walker whose "
+           "cluster is only its legs; 0 = no (m)");
     choice("remove", m.remove,
            {{"dynamic", RemovedObjects::kDynamic},
             {"person", RemovedObjects::kPerson},

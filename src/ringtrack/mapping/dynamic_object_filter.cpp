@@ -105,6 +105,22 @@ std::size_t LoggedScan::remove_inside(const core::Box3& box,
   return n;
 }
 
+float LoggedScan::lowest_in(const core::Box3& box) const {
+  const bool bounded =
+      bounded_points == points.size() && block_bounds.size() == block_count(points.size());
+  float lowest = std::numeric_limits<float>::infinity();
+  for (std::size_t b = 0; b < block_count(points.size()); ++b) {
+    if (bounded && (!block_bounds[b].intersects(box) || block_bounds[b].min.z() >= lowest)) {
+      continue;
+    }
+    const std::size_t end = std::min(points.size(), (b + 1) * kBlockPoints);
+    for (std::size_t i = b * kBlockPoints; i < end; ++i) {
+      if (points[i].z() < lowest && box.contains(points[i])) lowest = points[i].z();
+    }
+  }
+  return lowest;
+}
+
 DynamicObjectFilter::DynamicObjectFilter(const core::MappingConfig& config)
     : config_(config), map_(config.voxel_size_m) {}
 
@@ -138,12 +154,38 @@ bool DynamicObjectFilter::removable(const tracking::Hypothesis& h) const {
 
 void DynamicObjectFilter::remove_object_box(LoggedScan& scan, const core::Box3& box) {
   // Points of the object outside its detection: 2-4 % of a walker's points lie above its
-  // cluster's top (the head) or just beside it (docs/BENCHMARK.md, issue 12).
+  // cluster's top (the head) or just beside it, and more below it (the legs the segmentation
+  // left to the ground; docs/BENCHMARK.md, issue 12).
   if (box.empty()) return;
   const auto m = static_cast<float>(config_.object_margin_m);
-  const core::Box3 grown{{box.min.x() - m, box.min.y() - m, box.min.z()},
-                         {box.max.x() + m, box.max.y() + m, box.max.z() + m}};
+  core::Box3 grown{{box.min.x() - m, box.min.y() - m, box.min.z()},
+                   {box.max.x() + m, box.max.y() + m, box.max.z() + m}};
+  if (config_.object_ground_clearance_m > 0.0 || config_.object_min_height_m > 0.0) {
+    reach_ground(scan, grown);
+  }
   result_.object_box_points += scan.remove_inside(grown, &result_.removed_cells);
+}
+
+void DynamicObjectFilter::reach_ground(const LoggedScan& scan, core::Box3& grown) const {
+  // The ground beside the object: the lowest point of this scan under and around its box. The
+  // footprint alone often holds no ground (the body hides it, the rings meet the ground metres
+  // apart), and then its lowest point is a leg; a metre around it finds the ground beside the
+  // feet on any floor flatter than ~10 % over that metre.
+  constexpr float kGroundSearchM = 1.0f;
+  const float inf = std::numeric_limits<float>::infinity();
+  const core::Box3 around{
+      {grown.min.x() - kGroundSearchM, grown.min.y() - kGroundSearchM, -inf},
+      {grown.max.x() + kGroundSearchM, grown.max.y() + kGroundSearchM, grown.min.z()}};
+  const float ground = scan.lowest_in(around);
+  if (!(ground < grown.min.z())) return;  // nothing below it: the box shows all there is
+  if (config_.object_ground_clearance_m > 0.0) {
+    grown.min.z() =
+        std::min(grown.min.z(), ground + static_cast<float>(config_.object_ground_clearance_m));
+  }
+  if (config_.object_min_height_m > 0.0) {
+    grown.max.z() =
+        std::max(grown.max.z(), ground + static_cast<float>(config_.object_min_height_m));
+  }
 }
 
 void DynamicObjectFilter::release_front() {

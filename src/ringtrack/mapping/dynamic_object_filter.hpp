@@ -49,6 +49,9 @@ struct LoggedScan {
   /// bounds were computed for as many points as there are now, else tests every point.
   std::size_t remove_inside(const core::Box3& box,
                             std::vector<std::uint32_t>* removed_cells = nullptr);
+  /// Lowest height of the points inside box; +infinity when none is. Skips blocks as
+  /// remove_inside does.
+  [[nodiscard]] float lowest_in(const core::Box3& box) const;
 };
 
 /// What the filter did in one call.
@@ -144,8 +147,12 @@ class DynamicObjectFilter {
   void remove_gap(ObjectHistory& object, const core::Box3& box, std::uint64_t sequence);
   // Whether the hypothesis' points leave the scans (mapping.remove).
   [[nodiscard]] bool removable(const tracking::Hypothesis& h) const;
-  // Removes the points inside a measured dynamic box grown by object_margin_m (not downward).
+  // Removes the points inside a measured dynamic box grown by object_margin_m sideways and up,
+  // and by reach_ground down to the ground and up to a body's height.
   void remove_object_box(LoggedScan& scan, const core::Box3& box);
+  // Grows a box down to object_ground_clearance_m above the ground around it and up to
+  // object_min_height_m above that ground (both optional; unchanged when no point is lower).
+  void reach_ground(const LoggedScan& scan, core::Box3& grown) const;
   [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;
   void release_front();
   // Moves map voxels farther than mapping.map_radius_m from the sensor at pose to evicted_, a

@@ -6,9 +6,11 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <random>
+#include <set>
 #include <tuple>
 
 #include "ringtrack/core/error.hpp"
@@ -426,6 +428,95 @@ TEST(DynamicObjectFilter, GrownObjectBoxRemovesTheUnclusteredHead) {
   EXPECT_EQ(head_cells_kept(0.3), 0u);
   EXPECT_GT(head_cells_kept(0.2), 20u);  // a ring spacing above the margin: out of reach
   EXPECT_GT(head_cells_kept(0.0), 20u);
+}
+
+// A walker whose detection holds only its middle rings (the segmentation left the legs to the
+// ground and cut the head off): the grown box reaches down to object_ground_clearance_m above
+// the lowest point around it (here the feet's ring, standing in for the ground, which stays) and
+// up to object_min_height_m above it. Returns, over the scans in which the walker was dynamic,
+// how many of its cells below and above the detection were kept, and whether any wall cell went.
+struct OutsideKept {
+  std::size_t below{0};
+  std::size_t above{0};
+  std::size_t lowest_removed{0};
+  std::size_t walls_removed{0};
+};
+OutsideKept cells_outside_the_cluster(double clearance_m, double min_height_m) {
+  core::MappingConfig mapping;
+  mapping.object_ground_clearance_m = clearance_m;
+  mapping.object_min_height_m = min_height_m;
+  tracking::Tracker tracker{core::TrackingConfig{}};
+  DynamicObjectFilter filter(mapping);
+  const double low = kGroundZ + 0.7;   // rings 0-2 (the lowest at kGroundZ) below the cluster
+  const double high = kGroundZ + 1.3;  // rings 6-7 above the cluster and its 0.2 m margin
+  OutsideKept out;
+  for (int k = 0; k < 40; ++k) {
+    const Frame frame = render({{-2.0 + 0.1 * k, -2.0, 1}}, sensor_pose(k));
+    auto detections = detect(frame, {1});
+    std::vector<std::uint32_t> below, above, lowest;
+    for (auto& d : detections) {
+      std::erase_if(d.indices, [&](std::uint32_t i) {
+        const double z = frame.pose.to_world(frame.scan.point(i)).z();
+        if (z < kGroundZ + 0.01) lowest.push_back(i);
+        if (z < low) below.push_back(i);
+        if (z > high) above.push_back(i);
+        return z < low || z > high;
+      });
+      d.box = {};
+      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
+    }
+    const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
+    const auto& r = filter.process(frame.scan, frame.pose, detections, hypotheses);
+    if (hypotheses.empty() || !hypotheses.front().ever_dynamic) continue;
+    const std::set<std::uint32_t> removed(r.removed_cells.begin(), r.removed_cells.end());
+    for (const auto c : below) out.below += removed.count(c) == 0 ? 1 : 0;
+    for (const auto c : above) out.above += removed.count(c) == 0 ? 1 : 0;
+    for (const auto c : lowest) out.lowest_removed += removed.count(c);
+    for (const auto c : removed) out.walls_removed += frame.labels[c] == 0 ? 1 : 0;
+  }
+  return out;
+}
+
+TEST(DynamicObjectFilter, GrownObjectBoxReachesDownToTheGroundAndUpToABodysHeight) {
+  const OutsideKept off = cells_outside_the_cluster(0.0, 0.0);
+  ASSERT_GT(off.below, 40u) << "without the keys the legs below the cluster stay";
+  ASSERT_GT(off.above, 20u) << "and the head above its margin";
+  const OutsideKept on = cells_outside_the_cluster(0.1, 2.0);
+  EXPECT_EQ(on.walls_removed, 0u);
+  EXPECT_EQ(on.above, 0u);
+  EXPECT_EQ(on.lowest_removed, 0u) << "the lowest point around is the ground: it stays";
+  // Of the cells below, only the lowest ring stays (one per scan and column that hit the walker).
+  EXPECT_LT(on.below, off.below / 2);
+  const OutsideKept down_only = cells_outside_the_cluster(0.1, 0.0);
+  EXPECT_EQ(down_only.below, on.below);
+  EXPECT_EQ(down_only.above, off.above);
+}
+
+// lowest_in against a direct scan of the points, with and without the block bounds.
+TEST(LoggedScan, LowestInMatchesADirectScan) {
+  LoggedScan scan;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(-5.0f, 5.0f);
+  for (int i = 0; i < 1000; ++i) {
+    scan.points.emplace_back(u(rng), u(rng), u(rng) * 0.3f);
+    scan.cells.push_back(static_cast<std::uint32_t>(i));
+    scan.removed.push_back(0);
+  }
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int t = 0; t < 50; ++t) {
+    const float x = u(rng), y = u(rng), z = u(rng) * 0.3f;
+    const core::Box3 box{{x - 1.0f, y - 1.0f, -inf}, {x + 1.0f, y + 1.0f, z}};
+    float expected = inf;
+    for (const auto& p : scan.points) {
+      if (box.contains(p)) expected = std::min(expected, p.z());
+    }
+    scan.block_bounds.clear();
+    scan.bounded_points = 0;
+    EXPECT_EQ(scan.lowest_in(box), expected) << "unbounded, box " << t;
+    scan.update_bounds();
+    EXPECT_EQ(scan.lowest_in(box), expected) << "bounded, box " << t;
+  }
+  EXPECT_EQ(scan.lowest_in({{100.0f, 100.0f, -inf}, {101.0f, 101.0f, 0.0f}}), inf);
 }
 
 TEST(DynamicObjectFilter, MemoryStaysBoundedOnALongStaticRun) {
