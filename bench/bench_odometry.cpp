@@ -73,7 +73,8 @@ void BM_PipelineScanWithOdometry(benchmark::State& state) {
     odometry_ms += pipeline->process_with_odometry(scan).times.odometry_ms;
     ++next;
   }
-  state.counters["odometry_ms"] = benchmark::Counter(odometry_ms, benchmark::Counter::kAvgIterations);
+  state.counters["odometry_ms"] =
+      benchmark::Counter(odometry_ms, benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_PipelineScanWithOdometry)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 

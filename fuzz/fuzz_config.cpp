@@ -38,7 +38,8 @@ void config_overrides(const std::string& text) {
 
 void sequence_yaml(const std::string& text) {
   fuzz::expect_errors([&] {
-    const io::SequenceMeta meta = io::read_sequence_yaml(fuzz::write_scratch("sequence.yaml", text));
+    const io::SequenceMeta meta =
+        io::read_sequence_yaml(fuzz::write_scratch("sequence.yaml", text));
     (void)meta.sensor_model();
     const std::string formatted = io::format_sequence_yaml(meta);
     fuzz::must_succeed([&] {

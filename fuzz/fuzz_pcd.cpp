@@ -15,13 +15,13 @@ using namespace ringtrack;
 namespace {
 
 void round_trip(const io::PcdScan& read) {
-  for (const auto encoding : {io::PcdEncoding::kAscii, io::PcdEncoding::kBinary,
-                              io::PcdEncoding::kBinaryCompressed}) {
+  for (const auto encoding :
+       {io::PcdEncoding::kAscii, io::PcdEncoding::kBinary, io::PcdEncoding::kBinaryCompressed}) {
     const std::string pcd = io::encode_pcd(read.scan, read.labels, encoding);
     fuzz::must_succeed([&] {
-      const io::PcdScan again = io::decode_pcd(
-          std::span(reinterpret_cast<const std::uint8_t*>(pcd.data()), pcd.size()), "encoded.pcd",
-          {.row_order = io::PcdRowOrder::kBottomFirst});
+      const io::PcdScan again =
+          io::decode_pcd(std::span(reinterpret_cast<const std::uint8_t*>(pcd.data()), pcd.size()),
+                         "encoded.pcd", {.row_order = io::PcdRowOrder::kBottomFirst});
       fuzz::require(again.scan.rings() == read.scan.rings() &&
                         again.scan.columns() == read.scan.columns() &&
                         again.labels.size() == read.labels.size(),

@@ -53,8 +53,8 @@ void fuzz_hesai(fuzz::FuzzInput& in, std::uint8_t control, const std::string& te
   for (const auto& f : hesai::hesai_formats()) {
     if (f.channels == options.calibration.channels()) packet_bytes = f.packet_bytes();
   }
-  const auto path = fuzz::write_scratch(
-      "input.pcap", capture(in, (control & 2) != 0, packet_bytes, 2368, 2369));
+  const auto path =
+      fuzz::write_scratch("input.pcap", capture(in, (control & 2) != 0, packet_bytes, 2368, 2369));
   fuzz::expect_errors([&] { (void)io::pcap_holds_hesai(path, 2368); });
   fuzz::expect_errors([&] {
     io::HesaiPcapSource source(path, 2368, options, (control & 8) != 0);

@@ -114,8 +114,8 @@ void drain_source(Source& source) {
 /// take paths read the input from files written here.
 inline const std::filesystem::path& scratch_dir() {
   static const struct Scratch {
-    std::filesystem::path path = std::filesystem::temp_directory_path() /
-                                 ("ringtrack_fuzz_" + std::to_string(::getpid()));
+    std::filesystem::path path =
+        std::filesystem::temp_directory_path() / ("ringtrack_fuzz_" + std::to_string(::getpid()));
     Scratch() { std::filesystem::create_directories(path); }
     ~Scratch() {
       std::error_code ec;
@@ -130,14 +130,15 @@ inline std::filesystem::path write_scratch(const std::string& name,
                                            std::span<const std::uint8_t> bytes) {
   const std::filesystem::path path = scratch_dir() / name;
   std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+  out.write(reinterpret_cast<const char*>(bytes.data()),
+            static_cast<std::streamsize>(bytes.size()));
   return path;
 }
 
 /// Same for text.
 inline std::filesystem::path write_scratch(const std::string& name, std::string_view text) {
-  return write_scratch(
-      name, std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
+  return write_scratch(name,
+                       std::span(reinterpret_cast<const std::uint8_t*>(text.data()), text.size()));
 }
 
 /// A classic pcap file header (version 2.4, snap length 65535) for a link type (1 Ethernet,

@@ -29,7 +29,8 @@ void poses(const std::string& text) {
   fuzz::expect_errors([&] {
     const auto kitti = io::read_kitti_poses(path);
     std::vector<std::int64_t> stamps(kitti.size());
-    for (std::size_t i = 0; i < stamps.size(); ++i) stamps[i] = static_cast<std::int64_t>(i) * 100'000'000;
+    for (std::size_t i = 0; i < stamps.size(); ++i)
+      stamps[i] = static_cast<std::int64_t>(i) * 100'000'000;
     (void)io::read_kitti(path, stamps);
   });
   fuzz::expect_errors([&] { (void)io::read_stamps(path); });
@@ -50,7 +51,8 @@ void tables(const std::string& objects_text, const std::string& tracks_text) {
     have_tracks = true;
   });
   if (have_objects && have_tracks) {
-    fuzz::expect_errors([&] { io::check_scan_stamps(objects, "objects.csv", tracks, "tracks.csv"); });
+    fuzz::expect_errors(
+        [&] { io::check_scan_stamps(objects, "objects.csv", tracks, "tracks.csv"); });
   }
 }
 

@@ -31,17 +31,13 @@ void run_trajectory_eval(const TrajectoryEvalOptions& o) {
   options.segment_step = o.step;
   const auto m = eval::trajectory_metrics(estimate.poses(), reference.poses(), options);
   if (o.json) {
-    const nlohmann::ordered_json j = {{"estimate", o.estimate},
-                                      {"reference", o.reference},
-                                      {"matched_poses", m.matched_poses},
-                                      {"path_length_m", m.path_length_m},
-                                      {"ate_rmse_m", m.ate_rmse_m},
-                                      {"ate_mean_m", m.ate_mean_m},
-                                      {"ate_max_m", m.ate_max_m},
-                                      {"segments", m.segments},
-                                      {"rte_percent", m.rte_percent},
-                                      {"rre_deg_per_m", m.rre_deg_per_m},
-                                      {"final_drift_m", m.final_drift_m}};
+    const nlohmann::ordered_json j = {
+        {"estimate", o.estimate},           {"reference", o.reference},
+        {"matched_poses", m.matched_poses}, {"path_length_m", m.path_length_m},
+        {"ate_rmse_m", m.ate_rmse_m},       {"ate_mean_m", m.ate_mean_m},
+        {"ate_max_m", m.ate_max_m},         {"segments", m.segments},
+        {"rte_percent", m.rte_percent},     {"rre_deg_per_m", m.rre_deg_per_m},
+        {"final_drift_m", m.final_drift_m}};
     std::cout << j.dump(2) << "\n";
     return;
   }

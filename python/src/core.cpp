@@ -98,7 +98,8 @@ void bind_config(py::module_& m) {
 void bind_sensor_model(py::module_& m) {
   py::class_<core::SensorModel>(m, "SensorModel", "A spinning LiDAR's geometry and timing.")
       .def_static("by_name", &core::SensorModel::by_name, py::arg("name"),
-                  py::arg("scan_rate_hz") = 10.0, "vlp16, vlp32c, hdl32e, hdl64e (`ringtrack sensors`)")
+                  py::arg("scan_rate_hz") = 10.0,
+                  "vlp16, vlp32c, hdl32e, hdl64e (`ringtrack sensors`)")
       .def_static("vlp16", &core::SensorModel::vlp16, py::arg("scan_rate_hz") = 10.0)
       .def_readonly("name", &core::SensorModel::name)
       .def_property_readonly("rings", &core::SensorModel::rings)
@@ -120,8 +121,9 @@ void bind_pose(py::module_& m) {
       .def(py::init([](const Eigen::Vector3d& t, const Eigen::Vector4d& q_wxyz) {
              const Eigen::Quaterniond q(q_wxyz[0], q_wxyz[1], q_wxyz[2], q_wxyz[3]);
              if (!t.allFinite() || !q.coeffs().allFinite() || q.norm() < 1e-9) {
-               throw core::InputError("pose: translation and quaternion must be finite and the "
-                                      "quaternion non-zero");
+               throw core::InputError(
+                   "pose: translation and quaternion must be finite and the "
+                   "quaternion non-zero");
              }
              core::Pose p;
              p.translation = t;
@@ -160,20 +162,18 @@ auto grid_property(const std::vector<float>& (core::OrganizedScan::*array)() con
   };
 }
 
-core::OrganizedScan scan_from_ranges(const core::SensorModel& model,
-                                     py::array_t<float, py::array::c_style | py::array::forcecast>
-                                         ranges,
-                                     std::optional<py::array_t<float, py::array::c_style |
-                                                                          py::array::forcecast>>
-                                         intensity,
-                                     std::int64_t stamp_ns) {
+core::OrganizedScan scan_from_ranges(
+    const core::SensorModel& model,
+    py::array_t<float, py::array::c_style | py::array::forcecast> ranges,
+    std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>> intensity,
+    std::int64_t stamp_ns) {
   const int rings = model.rings(), cols = model.columns();
   if (ranges.ndim() != 2 || ranges.shape(0) != rings || ranges.shape(1) != cols) {
     throw core::InputError("ranges: expected shape (" + std::to_string(rings) + ", " +
                            std::to_string(cols) + ") for " + model.name);
   }
-  if (intensity && (intensity->ndim() != 2 || intensity->shape(0) != rings ||
-                    intensity->shape(1) != cols)) {
+  if (intensity &&
+      (intensity->ndim() != 2 || intensity->shape(0) != rings || intensity->shape(1) != cols)) {
     throw core::InputError("intensity: expected the shape of ranges");
   }
   core::OrganizedScan scan(rings, cols);

@@ -16,8 +16,8 @@ sim::Scenario scenario_from(const std::string& name_or_file, std::optional<doubl
                             bool moving) {
   const bool file = name_or_file.size() > 5 &&
                     (name_or_file.ends_with(".yaml") || name_or_file.ends_with(".yml"));
-  sim::Scenario s = file ? sim::load_scenario_file(name_or_file)
-                         : sim::builtin_scenario(name_or_file);
+  sim::Scenario s =
+      file ? sim::load_scenario_file(name_or_file) : sim::builtin_scenario(name_or_file);
   if (duration_s) s.duration_s = *duration_s;
   if (moving && s.sensor.motion == sim::SensorMotion::kStatic) s = sim::with_moving_sensor(s);
   sim::validate(s, s.name);
@@ -96,8 +96,7 @@ void bind_sim(py::module_& m) {
            "sensor on its figure 8.")
       .def("__iter__", [](SimulatorIterator& s) -> SimulatorIterator& { return s; })
       .def("__next__", &SimulatorIterator::next)
-      .def("__len__",
-           [](const SimulatorIterator& s) { return s.simulator().scan_count(); })
+      .def("__len__", [](const SimulatorIterator& s) { return s.simulator().scan_count(); })
       .def_property_readonly("model",
                              [](const SimulatorIterator& s) { return s.simulator().model(); })
       .def(

@@ -365,10 +365,10 @@ TEST(RunDeskewRecording, WithoutPosesTheOdometryEstimatesThem) {
       << r.out;
   EXPECT_TRUE(fs::exists(dir / "out" / "odometry.csv"));
   write_straight_line(dir / "line.txt", capture.scans.front().stamp_ns - 1'000'000'000,
-                     capture.scans.back().column_stamp_ns.back() + 1'000'000'000, {1, 0, 0});
-  const auto both = run_command(kCli + " run " + capture.pcap + " --odometry on --poses " +
-                                (dir / "line.txt").string() + " --quiet --out " +
-                                (dir / "o2").string());
+                      capture.scans.back().column_stamp_ns.back() + 1'000'000'000, {1, 0, 0});
+  const auto both =
+      run_command(kCli + " run " + capture.pcap + " --odometry on --poses " +
+                  (dir / "line.txt").string() + " --quiet --out " + (dir / "o2").string());
   EXPECT_NE(both.exit_code, 0);
   EXPECT_NE(both.err.find("--odometry on and --poses exclude each other"), std::string::npos)
       << both.err;

@@ -21,15 +21,15 @@ struct TrajectoryMetricsOptions {
 
 /// The figures.
 struct TrajectoryMetrics {
-  std::size_t matched_poses{0};   ///< estimated poses inside the reference's time span
-  double path_length_m{0.0};      ///< of the reference over the matched poses
-  double ate_rmse_m{0.0};         ///< absolute translation error after rigid alignment: RMSE
-  double ate_mean_m{0.0};         ///< ... mean
-  double ate_max_m{0.0};          ///< ... largest
-  std::size_t segments{0};        ///< relative-error segments evaluated (0: path too short)
-  double rte_percent{0.0};        ///< mean translation error per segment length, percent
-  double rre_deg_per_m{0.0};      ///< mean rotation error per segment length, degrees per metre
-  double final_drift_m{0.0};      ///< end-point error after aligning the first poses
+  std::size_t matched_poses{0};  ///< estimated poses inside the reference's time span
+  double path_length_m{0.0};     ///< of the reference over the matched poses
+  double ate_rmse_m{0.0};        ///< absolute translation error after rigid alignment: RMSE
+  double ate_mean_m{0.0};        ///< ... mean
+  double ate_max_m{0.0};         ///< ... largest
+  std::size_t segments{0};       ///< relative-error segments evaluated (0: path too short)
+  double rte_percent{0.0};       ///< mean translation error per segment length, percent
+  double rre_deg_per_m{0.0};     ///< mean rotation error per segment length, degrees per metre
+  double final_drift_m{0.0};     ///< end-point error after aligning the first poses
 };
 
 /// Compares estimate with reference. Each estimated pose is matched with the reference

@@ -7,7 +7,9 @@
 
 namespace ringtrack::experiment {
 
-bool PlannedRun::moving() const { return scenario.sensor.motion != sim::SensorMotion::kStatic; }
+bool PlannedRun::moving() const {
+  return scenario.sensor.motion != sim::SensorMotion::kStatic;
+}
 
 std::string PlannedRun::stem() const {
   std::string s = validation ? "V-" + scenario.name : std::to_string(scenario.number);

@@ -109,8 +109,8 @@ void RecordedScenario::expand(std::size_t k, sim::SimulatedScan& out,
   out.index = static_cast<std::int64_t>(k);
   out.pose = c.pose;
   out.objects = c.objects;
-  pipeline_pose = moving() && deskew_ ? pipeline::deskew_scan(out.scan, c.pose, c.next_pose)
-                                      : c.pose;
+  pipeline_pose =
+      moving() && deskew_ ? pipeline::deskew_scan(out.scan, c.pose, c.next_pose) : c.pose;
 }
 
 }  // namespace ringtrack::experiment

@@ -43,8 +43,8 @@ class RecordedScenario {
  private:
   struct CompactScan {
     std::int64_t stamp_ns{0};
-    core::Pose pose;       // sensor in world at the first column
-    core::Pose next_pose;  // at the next scan's start, for deskew
+    core::Pose pose;                   // sensor in world at the first column
+    core::Pose next_pose;              // at the next scan's start, for deskew
     std::vector<std::uint32_t> cells;  // cells that are not kNoReturn
     std::vector<float> range_m;        // per stored cell; out-of-range stand-ins for invalid ones
     std::vector<float> intensity;

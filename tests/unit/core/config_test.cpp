@@ -55,7 +55,8 @@ TEST(Config, RejectsOutOfRangeAndMalformedValuesByName) {
 TEST(Config, AListOrMapAsKeyIsAConfigError) {
   // Found while fixing fuzz_scenario's find: yaml-cpp threw its own exception (no ConfigError)
   // for a key that is a list or a map, at the top level and inside a section.
-  expect_config_error("[segmentation]: 1\n", "line 1: expected a key name, got a list or map as key");
+  expect_config_error("[segmentation]: 1\n",
+                      "line 1: expected a key name, got a list or map as key");
   expect_config_error("segmentation:\n  {a: 1}: 2\n",
                       "line 2: expected a key name, got a list or map as key");
 }

@@ -4,7 +4,6 @@
 #include "ringtrack/sim/scenario_file.hpp"
 
 #include <gtest/gtest.h>
-
 #include <sys/wait.h>
 
 #include <cstdlib>
