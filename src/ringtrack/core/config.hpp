@@ -145,9 +145,9 @@ struct MappingConfig {
   double box_margin_m{0.1};     // boxes grow by this before points inside them are removed
   double object_margin_m{0.2};  // a measured dynamic box grows by this sideways and up, and every
                                 // point inside leaves its scan (0: only its detection's cells)
-  // ... and down to this height above the lowest point around it, the ground (0: not down), and
-  double object_ground_clearance_m{0.1};
-  double object_min_height_m{2.0};  // up to at least this height above that ground (0: no)
+  double object_ground_clearance_m{0.1};  // ... and down to this height above the ground around
+                                          // it (its lowest point within 1 m; 0: not down)
+  double object_min_height_m{2.0};  // ... and up to at least this height above that ground (0: no)
   RemovedObjects remove{RemovedObjects::kDynamic};  // which tracked objects leave the map
   // Free-space line (docs/tracking.md): a logged candidate point (segmented, or near a
   // hypothesis) that a later scan sees through leaves the scan before it reaches the map.

@@ -131,9 +131,14 @@ core::Box3 DynamicObjectFilter::inflate(const core::Box3& box) const {
 
 void DynamicObjectFilter::remove_box(std::uint64_t sequence, const core::Box3& box) {
   if (box.empty()) return;
-  const core::Box3 grown = inflate(box);
+  core::Box3 grown = inflate(box);
   if (!log_.empty() && sequence >= log_.front().sequence && sequence <= log_.back().sequence) {
-    result_.retroactive_points += log_[sequence - log_.front().sequence].remove_inside(grown);
+    // A static era's and a gap's boxes miss the legs and the head as a measured box does.
+    LoggedScan& logged = log_[sequence - log_.front().sequence];
+    if (config_.object_ground_clearance_m > 0.0 || config_.object_min_height_m > 0.0) {
+      reach_ground(logged, grown);
+    }
+    result_.retroactive_points += logged.remove_inside(grown);
   } else if (log_.empty() || sequence < log_.front().sequence) {
     // The scan already went into the map: remove the voxels instead.
     result_.map_voxels_removed += map_.remove_inside(grown);

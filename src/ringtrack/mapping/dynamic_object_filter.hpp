@@ -152,6 +152,7 @@ class DynamicObjectFilter {
   void remove_object_box(LoggedScan& scan, const core::Box3& box);
   // Grows a box down to object_ground_clearance_m above the ground around it and up to
   // object_min_height_m above that ground (both optional; unchanged when no point is lower).
+  // Measured boxes and, in scans still in the log, static-era and gap boxes.
   void reach_ground(const LoggedScan& scan, core::Box3& grown) const;
   [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;
   void release_front();

@@ -492,6 +492,58 @@ TEST(DynamicObjectFilter, GrownObjectBoxReachesDownToTheGroundAndUpToABodysHeigh
   EXPECT_EQ(down_only.above, off.above);
 }
 
+// The same walker standing for its first 15 scans (its static era) before it walks: when it
+// turns dynamic, the retroactive boxes of those scans (still in the log) reach the legs below
+// and the head above the cluster too. Returns the walker's points left in the static-era scans
+// after the log was flushed, but for its lowest ring (the ground here).
+std::size_t static_era_points_kept(double clearance_m, double min_height_m) {
+  core::MappingConfig mapping;
+  mapping.object_ground_clearance_m = clearance_m;
+  mapping.object_min_height_m = min_height_m;
+  mapping.free_space = false;  // the boxes alone
+  tracking::Tracker tracker{core::TrackingConfig{}};
+  DynamicObjectFilter filter(mapping);
+  constexpr int kStanding = 15;
+  std::map<std::uint64_t, std::vector<std::uint32_t>> labels;  // per sequence
+  std::size_t kept = 0;
+  const auto count = [&](const std::vector<LoggedScan>& released) {
+    for (const LoggedScan& scan : released) {
+      if (scan.sequence >= kStanding) continue;
+      for (std::size_t i = 0; i < scan.points.size(); ++i) {
+        const bool walker = labels[scan.sequence][scan.cells[i]] == 1;
+        const bool lowest = scan.points[i].z() < kGroundZ + 0.01;
+        if (walker && !lowest && !scan.removed[i]) ++kept;
+      }
+    }
+  };
+  for (int k = 0; k < 60; ++k) {
+    const double x = -2.0 + 0.1 * std::max(0, k - kStanding);
+    const Frame frame = render({{x, -2.0, 1}}, sensor_pose(k));
+    labels[static_cast<std::uint64_t>(k)] = frame.labels;
+    auto detections = detect(frame, {1});
+    for (auto& d : detections) {
+      std::erase_if(d.indices, [&](std::uint32_t i) {
+        const double z = frame.pose.to_world(frame.scan.point(i)).z();
+        return z < kGroundZ + 0.7 || z > kGroundZ + 1.3;
+      });
+      d.box = {};
+      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
+    }
+    const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
+    filter.process(frame.scan, frame.pose, detections, hypotheses);
+    count(filter.released());
+  }
+  filter.flush();
+  count(filter.released());
+  return kept;
+}
+
+TEST(DynamicObjectFilter, StaticEraBoxesReachTheLegsAndTheHeadToo) {
+  const std::size_t off = static_era_points_kept(0.0, 0.0);
+  ASSERT_GT(off, 100u) << "without the keys the legs and the head of the standing scans stay";
+  EXPECT_EQ(static_era_points_kept(0.1, 2.0), 0u);
+}
+
 // lowest_in against a direct scan of the points, with and without the block bounds.
 TEST(LoggedScan, LowestInMatchesADirectScan) {
   LoggedScan scan;
