@@ -400,6 +400,11 @@ void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
   std::size_t homes[kChunk];
   std::size_t old_homes[kChunk];
   std::uint32_t which[kChunk];
+  // The voxel the home slot named when it was read for the prefetch (nullptr: none with the
+  // point's fingerprint). Inside a chunk a slot holding a voxel keeps it (new voxels take free
+  // slots; nothing is erased or moved until the chunk's end), so a voxel found there whose key
+  // matches is the point's voxel, and its lookup is not repeated.
+  Voxel* found[kChunk];
   constexpr std::size_t kHalf = kPrefetch / 2;
   const KeyLanes lanes(inverse_size_);
   for (std::size_t begin = 0; begin < points.size(); begin += kChunk) {
@@ -438,7 +443,11 @@ void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
       if (k >= kHalf && k - kHalf < n) {
         const std::size_t m = k - kHalf;
         const Slot s = table_[homes[m]];
-        if (slot_fp(s) == fps[m] && is_voxel(s)) __builtin_prefetch(&voxel(slot_index(s)));
+        found[m] = nullptr;
+        if (slot_fp(s) == fps[m] && is_voxel(s)) {
+          found[m] = &voxel(slot_index(s));
+          __builtin_prefetch(found[m]);
+        }
         if (moving && old_homes[m] >= drained_) {
           const Slot o = old_[old_homes[m]];
           if (slot_fp(o) == fps[m] && is_voxel(o)) __builtin_prefetch(&voxel(slot_index(o)));
@@ -447,7 +456,8 @@ void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
       if (k < kPrefetch) continue;
       const std::size_t j = k - kPrefetch;  // the point stored now
       if (keys[j] != last_key_) {
-        last_point_ = &locate(keys[j], fps[j]);
+        last_point_ = found[j] != nullptr && found[j]->key == keys[j] ? &found[j]->point
+                                                                      : &locate(keys[j], fps[j]);
         last_key_ = keys[j];
       }
       accumulate(*last_point_, points[which[j]], intensities[which[j]]);

@@ -11,6 +11,7 @@
 #include <limits>
 #include <random>
 #include <set>
+#include <unordered_map>
 #include <vector>
 
 #include "ringtrack/mapping/static_map.hpp"
@@ -98,6 +99,98 @@ TEST(StaticMapKeys, BatchKeysMatchTheScalarKeys) {
   }
   EXPECT_EQ(batch.dropped_points(), dropped);
   EXPECT_EQ(batch.size(), naive.size());
+}
+
+// The batch insert answers a point from the voxel its home slot named when the slot was
+// prefetched, when the keys match, and looks it up otherwise. Points that revisit voxels in
+// every pattern (runs of one voxel, alternations, voxels made earlier in the same chunk, new
+// voxels among old ones), in maps young and large enough to resize, against single inserts.
+TEST(StaticMapKeys, BatchLookupsMatchSingleInsertsOnRevisits) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> coord(-3.0f, 3.0f);
+  std::uniform_int_distribution<int> pattern(0, 3);
+  StaticMap batch(kVoxel);
+  StaticMap single(kVoxel);
+  std::vector<Eigen::Vector3f> seen;
+  for (int scan = 0; scan < 60; ++scan) {
+    std::vector<Eigen::Vector3f> points;
+    while (points.size() < 3000) {
+      const Eigen::Vector3f a(coord(rng), coord(rng), 0.3f * coord(rng));
+      const Eigen::Vector3f b = seen.empty() ? a : seen[rng() % seen.size()];
+      switch (pattern(rng)) {
+        case 0:  // a run in one voxel
+          for (int k = 0; k < 5; ++k) points.push_back(a);
+          break;
+        case 1:  // alternating between a new and an old voxel
+          for (int k = 0; k < 6; ++k) points.push_back(k % 2 == 0 ? a : b);
+          break;
+        case 2:  // an old voxel again
+          points.push_back(b);
+          break;
+        default:
+          points.push_back(a);
+      }
+    }
+    seen.insert(seen.end(), points.begin(), points.begin() + 200);
+    std::vector<float> intensities(points.size());
+    for (std::size_t i = 0; i < points.size(); ++i) intensities[i] = static_cast<float>(i % 97);
+    batch.insert(points, intensities, {});
+    for (std::size_t i = 0; i < points.size(); ++i) single.insert(points[i], intensities[i]);
+    ASSERT_EQ(batch.size(), single.size()) << "scan " << scan;
+  }
+  const auto a = batch.points();
+  const auto b = single.points();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    ASSERT_EQ(a[i].count, b[i].count) << "voxel " << i;
+    ASSERT_EQ(a[i].position, b[i].position) << "voxel " << i;
+    ASSERT_EQ(a[i].intensity, b[i].intensity) << "voxel " << i;
+  }
+}
+
+// Two voxels whose keys share the slot fingerprint (the top 32 bits of the key's Fibonacci hash,
+// as static_map.cpp computes it), so the second one's home slot names the first: the batch
+// insert must still tell them apart by the key.
+TEST(StaticMapKeys, BatchInsertTellsVoxelsWithOneFingerprintApart) {
+  const auto pack = [](std::int64_t x, std::int64_t y, std::int64_t z) {
+    constexpr std::int64_t kOffset = std::int64_t{1} << 20;
+    return (static_cast<std::uint64_t>(x + kOffset) << 42) |
+           (static_cast<std::uint64_t>(y + kOffset) << 21) |
+           static_cast<std::uint64_t>(z + kOffset);
+  };
+  const auto fingerprint = [](std::uint64_t key) {
+    return static_cast<std::uint32_t>((key * 0x9E3779B97F4A7C15ull) >> 32);
+  };
+  // Birthday search among random voxels for two with one fingerprint.
+  std::mt19937_64 rng(17);
+  std::uniform_int_distribution<std::int64_t> index(-1000, 999);
+  std::unordered_map<std::uint32_t, std::array<std::int64_t, 3>> by_fp;
+  std::array<std::int64_t, 3> first{}, second{};
+  bool collided = false;
+  while (!collided) {
+    const std::array<std::int64_t, 3> v{index(rng), index(rng), index(rng)};
+    const auto [it, fresh] = by_fp.try_emplace(fingerprint(pack(v[0], v[1], v[2])), v);
+    if (!fresh && it->second != v) {
+      first = it->second;
+      second = v;
+      collided = true;
+    }
+  }
+  const auto centre = [](const std::array<std::int64_t, 3>& v) {
+    return Eigen::Vector3f((static_cast<float>(v[0]) + 0.5f) * static_cast<float>(kVoxel),
+                           (static_cast<float>(v[1]) + 0.5f) * static_cast<float>(kVoxel),
+                           (static_cast<float>(v[2]) + 0.5f) * static_cast<float>(kVoxel));
+  };
+  const Eigen::Vector3f a = centre(first), b = centre(second);
+  const std::vector<Eigen::Vector3f> points{a, a, b, a, b, b, a};
+  const std::vector<float> intensities(points.size(), 1.0f);
+  StaticMap map(kVoxel);
+  map.insert(points, intensities, {});
+  map.insert(points, intensities, {});
+  ASSERT_EQ(map.size(), 2u);
+  ASSERT_NE(map.voxel_at(a), nullptr);
+  ASSERT_NE(map.voxel_at(b), nullptr);
+  EXPECT_EQ(map.voxel_at(a)->count, 8u);
+  EXPECT_EQ(map.voxel_at(b)->count, 6u);
 }
 
 }  // namespace
