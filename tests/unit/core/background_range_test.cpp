@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -297,6 +298,56 @@ TEST(BackgroundRange, MatchesTheNaiveReferenceCellByCell) {
       }
     }
     EXPECT_GT(model.learned_count(), model.size() / 2);
+  }
+}
+
+// The same, with whole blocks of neighbouring cells switching between a wall, open sky (no
+// return, too far) and mixtures scan by scan, and the columns' azimuths rotated so that the
+// cells are not the scan indices and one block of columns wraps around the bins: the model's
+// four-cell fast path (common blocks) and its cell-by-cell path (every other block) against the
+// reference.
+TEST(BackgroundRange, MatchesTheNaiveReferenceAsBlocksSwitchBetweenWallAndSky) {
+  const auto m = small_model();
+  for (const int rotate : {0, 5}) {
+    BackgroundRangeConfig cfg = config(4, 3);
+    cfg.smoothing = 0.1;
+    cfg.learn_no_return = true;
+    BackgroundRangeModel model(m, cfg);
+    NaiveBackground naive(model.size(), cfg);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> noise(-0.05f, 0.05f);
+    std::uniform_int_distribution<int> odd(0, 40);
+    for (int k = 0; k < 240; ++k) {
+      OrganizedScan s(m.rings(), m.columns());
+      s.set_uniform_columns(m, 0);
+      std::rotate(s.column_azimuth_rad.begin(), s.column_azimuth_rad.begin() + rotate,
+                  s.column_azimuth_rad.end());
+      for (int r = 0; r < m.rings(); ++r) {
+        for (int c = 0; c < m.columns(); ++c) {
+          const int block = c / 4;
+          const int regime = (k / (6 + block + r)) % 4;
+          const int o = odd(rng);
+          if (regime == 0 || (regime == 3 && o == 0)) {
+            s.set_range(m, r, c, 8.0f + 0.5f * static_cast<float>(block) + noise(rng), 1.0f);
+          } else if (regime == 1 || o == 1) {
+            s.set_invalid(r, c, ReturnStatus::kNoReturn);
+          } else if (regime == 2 || o == 2) {
+            s.set_invalid(r, c, ReturnStatus::kTooFar);
+          } else {
+            s.set_range(m, r, c, 3.0f + noise(rng), 1.0f);  // something in front
+          }
+        }
+      }
+      model.update(s);
+      for (std::size_t i = 0; i < s.size(); ++i) {
+        naive.observe(model.cell_of(s, i), s.statuses()[i], s.ranges()[i]);
+      }
+      for (std::size_t i = 0; i < model.size(); ++i) {
+        const float a = model.background_range(i), b = naive.background(i);
+        ASSERT_TRUE(a == b || (std::isnan(a) && std::isnan(b)))
+            << "rotate " << rotate << " scan " << k << " cell " << i << ": " << a << " vs " << b;
+      }
+    }
   }
 }
 
