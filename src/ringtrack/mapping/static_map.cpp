@@ -387,6 +387,9 @@ void StaticMap::insert(const std::vector<Eigen::Vector3f>& points,
 
 static_assert(SettledCells::kKeysPerCell == 4, "insert_batch compares four keys per cell");
 
+// One piece on purpose: the chunk's arrays, the two-stage prefetch and the store loop share
+// their indices, and with the prefetches in a lambda g++ 12 dropped all of them (below).
+// NOLINTNEXTLINE(readability-function-cognitive-complexity)
 void StaticMap::insert_batch(const std::vector<Eigen::Vector3f>& points,
                              const std::vector<float>& intensities,
                              const std::vector<std::uint8_t>& skip,
@@ -537,6 +540,32 @@ std::size_t StaticMap::remove_outside(const Eigen::Vector2f& center, float radiu
   return removed;
 }
 
+void StaticMap::collect_inside(const std::uint64_t* keys, std::size_t n, const core::Box3& box,
+                               std::vector<std::uint64_t>& doomed) const {
+  std::uint32_t fps[kChunk];
+  std::size_t homes[kChunk];
+  for (std::size_t k = 0; k < n; ++k) {
+    fps[k] = fingerprint(keys[k]);
+    homes[k] = home(fps[k], table_.bits);
+  }
+  for (std::size_t k = 0; k < std::min(n, kPrefetch); ++k) __builtin_prefetch(&table_[homes[k]]);
+  const std::size_t mask = table_.size - 1;
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k + kPrefetch < n) __builtin_prefetch(&table_[homes[k + kPrefetch]]);
+    std::size_t i = homes[k];
+    while (table_[i] != kFree && !holds(table_[i], fps[k], keys[k])) i = (i + 1) & mask;
+    const MapPoint* p = nullptr;
+    if (table_[i] != kFree) {
+      p = &voxel(slot_index(table_[i])).point;
+    } else if (phase_ == Phase::kMoving) {
+      if (const std::size_t o = find_old(keys[k], fps[k]); o < old_.size) {
+        p = &voxel(slot_index(old_[o])).point;
+      }
+    }
+    if (p != nullptr && box.contains(p->position)) doomed.push_back(keys[k]);
+  }
+}
+
 std::size_t StaticMap::remove_inside(const core::Box3& box) {
   if (box.empty() || size_ == 0) return 0;
   std::vector<std::uint64_t> doomed;
@@ -552,31 +581,9 @@ std::size_t StaticMap::remove_inside(const core::Box3& box) {
     // fetched ahead (a box of 10^5 voxels costs 10^5 lookups, mostly misses in a large table,
     // decided by the fingerprints alone).
     std::uint64_t keys[kChunk];
-    std::uint32_t fps[kChunk];
-    std::size_t homes[kChunk];
     std::size_t n = 0;
     const auto lookup = [&] {
-      for (std::size_t k = 0; k < n; ++k) {
-        fps[k] = fingerprint(keys[k]);
-        homes[k] = home(fps[k], table_.bits);
-      }
-      for (std::size_t k = 0; k < std::min(n, kPrefetch); ++k)
-        __builtin_prefetch(&table_[homes[k]]);
-      const std::size_t mask = table_.size - 1;
-      for (std::size_t k = 0; k < n; ++k) {
-        if (k + kPrefetch < n) __builtin_prefetch(&table_[homes[k + kPrefetch]]);
-        std::size_t i = homes[k];
-        while (table_[i] != kFree && !holds(table_[i], fps[k], keys[k])) i = (i + 1) & mask;
-        const MapPoint* p = nullptr;
-        if (table_[i] != kFree) {
-          p = &voxel(slot_index(table_[i])).point;
-        } else if (phase_ == Phase::kMoving) {
-          if (const std::size_t o = find_old(keys[k], fps[k]); o < old_.size) {
-            p = &voxel(slot_index(old_[o])).point;
-          }
-        }
-        if (p != nullptr && box.contains(p->position)) doomed.push_back(keys[k]);
-      }
+      collect_inside(keys, n, box, doomed);
       n = 0;
     };
     const auto x0 = static_cast<std::int64_t>(lo.x()), x1 = static_cast<std::int64_t>(hi.x());

@@ -159,6 +159,10 @@ class StaticMap {
   [[nodiscard]] std::size_t find_old(std::uint64_t key, std::uint32_t fp) const;
   void erase_slot(std::size_t i);
   void erase(std::uint64_t key);
+  // Appends to doomed the keys[0, n) whose voxels exist and lie inside box; the home slots are
+  // fetched kPrefetch keys ahead (remove_inside's small-box path).
+  void collect_inside(const std::uint64_t* keys, std::size_t n, const core::Box3& box,
+                      std::vector<std::uint64_t>& doomed) const;
   static void accumulate(MapPoint& m, const Eigen::Vector3f& p, float intensity);
   std::size_t add_voxel(std::uint64_t key);  // appended to the dense array; its index
   // The voxel's point wherever its slot is (old_ first while it drains), claimed in table_ if new.
