@@ -76,6 +76,61 @@ std::size_t BackgroundRangeModel::cell_of(const OrganizedScan& scan, std::size_t
          static_cast<std::size_t>(bin);
 }
 
+#if defined(__SSE2__)
+namespace {
+// Four cells of consecutive bins at once, when all four take the common case of update()'s
+// per-cell step: a return on the learned surface, or open sky seen open again. The same
+// arithmetic in float and double lanes, bit for bit (MatchesTheNaiveReferenceCellByCell);
+// update() returns false for any other block, which then goes cell by cell.
+class FourCells {
+ public:
+  FourCells(float smoothing, double tolerance, double relative, bool learn_open)
+      : tolerance_(_mm_set1_pd(tolerance)),
+        relative_(_mm_set1_pd(relative)),
+        smoothing_(_mm_set1_ps(smoothing)),
+        learn_open_(learn_open) {}
+
+  bool update(const ReturnStatus* status, const float* range, float* background,
+              std::uint16_t* streak) const {
+    std::uint32_t st4 = 0;
+    std::memcpy(&st4, status, sizeof(st4));
+    if (st4 == 0x01010101u) return on_surface(range, background, streak);  // four kValid
+    // All four kNoReturn (0) or kTooFar (3): open sky seen open again?
+    if (learn_open_ && (st4 & 0xFCFCFCFCu) == 0 && ((st4 ^ (st4 >> 1)) & 0x01010101u) == 0) {
+      const __m128 bg = _mm_loadu_ps(background);
+      if (_mm_movemask_ps(_mm_cmpeq_ps(bg, _mm_set1_ps(kInf))) != 0xF) return false;
+      std::memset(streak, 0, 4 * sizeof(std::uint16_t));
+      return true;
+    }
+    return false;
+  }
+
+ private:
+  bool on_surface(const float* range, float* background, std::uint16_t* streak) const {
+    const __m128 x = _mm_loadu_ps(range);
+    const __m128 bg = _mm_loadu_ps(background);
+    const __m128 d = _mm_sub_ps(x, bg);
+    const __m128 ad = _mm_andnot_ps(_mm_set1_ps(-0.0f), d);
+    const __m128 mn = _mm_min_ps(bg, x);  // std::min(x, bg): bg when bg < x, else x
+    const __m128d lo = _mm_cmple_pd(
+        _mm_cvtps_pd(ad), _mm_add_pd(tolerance_, _mm_mul_pd(relative_, _mm_cvtps_pd(mn))));
+    const __m128d hi = _mm_cmple_pd(
+        _mm_cvtps_pd(_mm_movehl_ps(ad, ad)),
+        _mm_add_pd(tolerance_, _mm_mul_pd(relative_, _mm_cvtps_pd(_mm_movehl_ps(mn, mn)))));
+    if ((_mm_movemask_pd(lo) | (_mm_movemask_pd(hi) << 2)) != 0xF) return false;
+    _mm_storeu_ps(background, _mm_add_ps(bg, _mm_mul_ps(smoothing_, d)));
+    std::memset(streak, 0, 4 * sizeof(std::uint16_t));
+    return true;
+  }
+
+  __m128d tolerance_;
+  __m128d relative_;
+  __m128 smoothing_;
+  bool learn_open_;
+};
+}  // namespace
+#endif
+
 void BackgroundRangeModel::update(const OrganizedScan& scan) {
   if (scan.rings() != rings_) {
     throw InputError("background range: the scan has " + std::to_string(scan.rings()) +
@@ -98,11 +153,7 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
   std::uint16_t* streak = streak_.data();
   const int columns = scan.columns();
 #if defined(__SSE2__)
-  const __m128d tolerance2 = _mm_set1_pd(tolerance);
-  const __m128d relative2 = _mm_set1_pd(relative);
-  const __m128 smoothing4 = _mm_set1_ps(smoothing);
-  const __m128 sign4 = _mm_set1_ps(-0.0f);
-  const __m128 inf4 = _mm_set1_ps(kInf);
+  const FourCells four(smoothing, tolerance, relative, learn_open);
 #endif
   for (int r = 0; r < rings_; ++r) {
     const std::size_t row = static_cast<std::size_t>(r) * static_cast<std::size_t>(bins_);
@@ -135,41 +186,15 @@ void BackgroundRangeModel::update(const OrganizedScan& scan) {
     };
     int c = 0;
 #if defined(__SSE2__)
-    // Four neighbouring columns of consecutive bins at once when all four take the common case
-    // (a return on the learned surface, or open sky seen open again): the same arithmetic as
-    // step() in float and double lanes, bit for bit (MatchesTheNaiveReferenceCellByCell);
-    // any other block goes through step() cell by cell.
+    // Four neighbouring columns of consecutive bins at once where all four take the common
+    // case (FourCells); any other block goes through step() cell by cell.
     for (; c + 4 <= columns; c += 4) {
       const int bin = column_bin[c];
-      std::uint32_t st4 = 0;
-      std::memcpy(&st4, status + c, sizeof(st4));
-      const std::size_t cell = row + static_cast<std::size_t>(bin);
       const bool consecutive = bin >= 0 && column_bin[c + 1] == bin + 1 &&
                                column_bin[c + 2] == bin + 2 && column_bin[c + 3] == bin + 3;
-      if (consecutive && st4 == 0x01010101u) {
-        const __m128 x = _mm_loadu_ps(range + c);
-        const __m128 bg = _mm_loadu_ps(background + cell);
-        const __m128 d = _mm_sub_ps(x, bg);
-        const __m128 ad = _mm_andnot_ps(sign4, d);
-        const __m128 mn = _mm_min_ps(bg, x);  // std::min(x, bg): bg when bg < x, else x
-        const __m128d lo = _mm_cmple_pd(
-            _mm_cvtps_pd(ad), _mm_add_pd(tolerance2, _mm_mul_pd(relative2, _mm_cvtps_pd(mn))));
-        const __m128d hi = _mm_cmple_pd(
-            _mm_cvtps_pd(_mm_movehl_ps(ad, ad)),
-            _mm_add_pd(tolerance2, _mm_mul_pd(relative2, _mm_cvtps_pd(_mm_movehl_ps(mn, mn)))));
-        if ((_mm_movemask_pd(lo) | (_mm_movemask_pd(hi) << 2)) == 0xF) {
-          _mm_storeu_ps(background + cell, _mm_add_ps(bg, _mm_mul_ps(smoothing4, d)));
-          std::memset(streak + cell, 0, 4 * sizeof(std::uint16_t));
-          continue;
-        }
-      } else if (consecutive && learn_open && (st4 & 0xFCFCFCFCu) == 0 &&
-                 ((st4 ^ (st4 >> 1)) & 0x01010101u) == 0) {
-        // All four kNoReturn (0) or kTooFar (3): open sky seen open again?
-        const __m128 bg = _mm_loadu_ps(background + cell);
-        if (_mm_movemask_ps(_mm_cmpeq_ps(bg, inf4)) == 0xF) {
-          std::memset(streak + cell, 0, 4 * sizeof(std::uint16_t));
-          continue;
-        }
+      const std::size_t cell = row + static_cast<std::size_t>(bin);
+      if (consecutive && four.update(status + c, range + c, background + cell, streak + cell)) {
+        continue;
       }
       step(c);
       step(c + 1);
