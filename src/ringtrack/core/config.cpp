@@ -390,6 +390,10 @@ class Schema {
     number("object_min_height_m", m.object_min_height_m, 0.0, 10.0,
            "and up to at least this height above that ground: the head of a walker whose "
            "cluster is only its legs; 0 = no (m)");
+    number("object_outer_margin_m", m.object_outer_margin_m, 0.0, 10.0,
+           "beyond object_margin_m and up to this sideways, points leave too unless their "
+           "static-map voxel was seen free_space_protect_count times (structure beside the "
+           "object: a wall, a post); not more than object_margin_m = no (m)");
     choice("remove", m.remove,
            {{"dynamic", RemovedObjects::kDynamic},
             {"person", RemovedObjects::kPerson},

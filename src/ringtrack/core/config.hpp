@@ -148,6 +148,8 @@ struct MappingConfig {
   double object_ground_clearance_m{0.1};  // ... and down to this height above the ground around
                                           // it (its lowest point within 1 m; 0: not down)
   double object_min_height_m{2.0};  // ... and up to at least this height above that ground (0: no)
+  double object_outer_margin_m{0.3};  // ... and sideways to this, but for points of map voxels seen
+                                      // free_space_protect_count times (<= object_margin_m: no)
   RemovedObjects remove{RemovedObjects::kDynamic};  // which tracked objects leave the map
   // Free-space line (docs/tracking.md): a logged candidate point (segmented, or near a
   // hypothesis) that a later scan sees through leaves the scan before it reaches the map.

@@ -150,6 +150,9 @@ class DynamicObjectFilter {
   // Removes the points inside a measured dynamic box grown by object_margin_m sideways and up,
   // and by reach_ground down to the ground and up to a body's height.
   void remove_object_box(LoggedScan& scan, const core::Box3& box);
+  // Removes the points between grown and grown widened to object_outer_margin_m whose map
+  // voxels are not established structure (free_space_protect_count).
+  void remove_outer_ring(LoggedScan& scan, const core::Box3& grown);
   // Grows a box down to object_ground_clearance_m above the ground around it and up to
   // object_min_height_m above that ground (both optional; unchanged when no point is lower).
   // Measured boxes and, in scans still in the log, static-era and gap boxes.

@@ -544,6 +544,78 @@ TEST(DynamicObjectFilter, StaticEraBoxesReachTheLegsAndTheHeadToo) {
   EXPECT_EQ(static_era_points_kept(0.1, 2.0), 0u);
 }
 
+// A walker beside the wall whose detection holds only the half of its points nearer the wall's
+// side of its path: the rest lie up to a body's radius beside the box. Between object_margin_m
+// (0.2 m) and object_outer_margin_m (0.3 m) the walker's points leave, and the wall's stay when
+// the map has seen them often (free_space_protect_count). Counts over the scans in which the
+// walker was dynamic: its points kept in that ring, and the wall's points in it removed.
+struct OuterRing {
+  std::size_t walker_kept{0};
+  std::size_t walls_in_ring{0};
+  std::size_t walls_removed{0};
+};
+OuterRing outer_ring(double outer_margin_m, int protect_count) {
+  core::MappingConfig mapping;
+  mapping.object_outer_margin_m = outer_margin_m;
+  mapping.free_space_protect_count = protect_count;
+  mapping.log_delay_scans = 2;  // the wall reaches the map early and is seen there often
+  tracking::Tracker tracker{core::TrackingConfig{}};
+  DynamicObjectFilter filter(mapping);
+  OuterRing out;
+  for (int k = 0; k < 60; ++k) {
+    // Walking along y beside the wall (a circle of kWallRadius), its centre 0.27 m from it: the
+    // sensor sees the near half of the body, so the box ends at the centre, the wall 0.27 m on.
+    const double y = -3.0 + 0.1 * k;
+    const double x = std::sqrt(kWallRadius * kWallRadius - y * y) - 0.27;
+    const Frame frame = render({{x, y, 1}}, sensor_pose(k));
+    auto detections = detect(frame, {1});
+    std::vector<std::uint32_t> dropped;
+    for (auto& d : detections) {
+      std::erase_if(d.indices, [&](std::uint32_t i) {
+        const bool behind = frame.pose.to_world(frame.scan.point(i)).y() > y;
+        if (behind) dropped.push_back(i);
+        return behind;
+      });
+      d.box = {};
+      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
+    }
+    const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
+    const auto& r = filter.process(frame.scan, frame.pose, detections, hypotheses);
+    if (hypotheses.empty() || !hypotheses.front().ever_dynamic || detections.empty()) continue;
+    const std::set<std::uint32_t> removed(r.removed_cells.begin(), r.removed_cells.end());
+    const core::Box3& box = detections.front().box;
+    const auto in_ring = [&](const Eigen::Vector3f& p) {
+      const float dx = std::max({box.min.x() - p.x(), p.x() - box.max.x(), 0.0f});
+      const float dy = std::max({box.min.y() - p.y(), p.y() - box.max.y(), 0.0f});
+      const float d = std::max(dx, dy);
+      return d > 0.21f && d < 0.29f && p.z() >= box.min.z() && p.z() <= box.max.z();
+    };
+    for (const auto c : dropped) {
+      if (in_ring(frame.pose.to_world(frame.scan.point(c))))
+        out.walker_kept += removed.count(c) == 0;
+    }
+    for (std::size_t c = 0; c < frame.labels.size(); ++c) {
+      if (frame.labels[c] != 0 || !in_ring(frame.pose.to_world(frame.scan.point(c)))) continue;
+      ++out.walls_in_ring;
+      out.walls_removed += removed.count(static_cast<std::uint32_t>(c));
+    }
+  }
+  return out;
+}
+
+TEST(DynamicObjectFilter, OuterMarginTakesTheWalkerNotTheWallBesideIt) {
+  const OuterRing off = outer_ring(0.2, 10);
+  ASSERT_GT(off.walker_kept, 10u) << "at 0.2 m the walker's points beside the box stay";
+  ASSERT_GT(off.walls_in_ring, 10u)
+      << "the wall must come within the ring, or the test shows nothing";
+  EXPECT_EQ(off.walls_removed, 0u);
+  const OuterRing on = outer_ring(0.3, 10);
+  EXPECT_EQ(on.walker_kept, 0u);
+  EXPECT_EQ(on.walls_removed, 0u) << "the map has seen the wall often: it stays";
+  const OuterRing unprotected = outer_ring(0.3, 1000000);
+  EXPECT_GT(unprotected.walls_removed, 10u) << "without the map's protection the wall goes";
+}
+
 // lowest_in against a direct scan of the points, with and without the block bounds.
 TEST(LoggedScan, LowestInMatchesADirectScan) {
   LoggedScan scan;
