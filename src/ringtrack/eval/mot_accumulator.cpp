@@ -260,13 +260,8 @@ std::vector<MotPair> MotAccumulator::update(std::span<const std::int64_t> object
   };
 
   // Pairable entries, with NaN for the rest.
-  Eigen::MatrixXd usable(n_obj, n_hyp);
-  for (Eigen::Index i = 0; i < n_obj; ++i) {
-    for (Eigen::Index j = 0; j < n_hyp; ++j) {
-      const double d = distances(i, j);
-      usable(i, j) = pairable(d) ? d : kNaN;
-    }
-  }
+  const Eigen::MatrixXd usable =
+      distances.unaryExpr([this](double d) { return pairable(d) ? d : kNaN; });
 
   std::vector<Eigen::Index> row_match(static_cast<std::size_t>(n_obj), kUnassigned);
   std::vector<char> col_taken(static_cast<std::size_t>(n_hyp), 0);
