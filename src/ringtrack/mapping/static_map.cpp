@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <memory>
 #include <new>
 #include <stdexcept>
@@ -60,8 +61,11 @@ struct KeyLanes {
 [[gnu::always_inline]] inline bool voxel_key(const Eigen::Vector3f& p, const KeyLanes& lanes,
                                              std::uint64_t& key) {
   const float* f = p.data();
-  // x, y, z, 0 (no read past the point).
-  const __m128 xy = _mm_castpd_ps(_mm_load_sd(reinterpret_cast<const double*>(f)));
+  // x, y, z, 0 (no read past the point). x and y as one 8-byte load: memcpy, since the point
+  // is only 4-byte aligned (a double* load of it is undefined; UBSan's misaligned load).
+  double xy_pair = 0.0;
+  std::memcpy(&xy_pair, f, sizeof(xy_pair));
+  const __m128 xy = _mm_castpd_ps(_mm_set_sd(xy_pair));
   const __m128 v = _mm_mul_ps(_mm_movelh_ps(xy, _mm_load_ss(f + 2)), lanes.scale);
   const __m128 inside = _mm_cmplt_ps(_mm_andnot_ps(lanes.sign, v), lanes.limit);
   if ((_mm_movemask_ps(inside) & 7) != 7) return false;
