@@ -82,19 +82,23 @@ void LoggedScan::update_bounds() {
   bounded_points = points.size();
 }
 
+bool LoggedScan::bounds_current() const {
+  return bounded_points == points.size() && block_bounds.size() == block_count(points.size());
+}
+
 std::size_t LoggedScan::remove_inside(const core::Box3& box,
-                                      std::vector<std::uint32_t>* removed_cells) {
+                                      std::vector<std::uint32_t>* removed_cells,
+                                      const std::function<bool(const Eigen::Vector3f&)>& keep) {
   // Retroactive removal tests the boxes of an object's whole static era (up to
   // log_delay_scans scans, each with tens of thousands of points); the block bounds cut that
   // to the few blocks the box meets.
-  const bool bounded =
-      bounded_points == points.size() && block_bounds.size() == block_count(points.size());
+  const bool bounded = bounds_current();
   std::size_t n = 0;
   for (std::size_t b = 0; b < block_count(points.size()); ++b) {
     if (bounded && !block_bounds[b].intersects(box)) continue;
     const std::size_t end = std::min(points.size(), (b + 1) * kBlockPoints);
     for (std::size_t i = b * kBlockPoints; i < end; ++i) {
-      if (!removed[i] && box.contains(points[i])) {
+      if (!removed[i] && box.contains(points[i]) && !(keep && keep(points[i]))) {
         removed[i] = 1;
         ++n;
         if (removed_cells != nullptr) removed_cells->push_back(cells[i]);
@@ -106,8 +110,7 @@ std::size_t LoggedScan::remove_inside(const core::Box3& box,
 }
 
 float LoggedScan::lowest_in(const core::Box3& box) const {
-  const bool bounded =
-      bounded_points == points.size() && block_bounds.size() == block_count(points.size());
+  const bool bounded = bounds_current();
   float lowest = std::numeric_limits<float>::infinity();
   for (std::size_t b = 0; b < block_count(points.size()); ++b) {
     if (bounded && (!block_bounds[b].intersects(box) || block_bounds[b].min.z() >= lowest)) {
@@ -135,9 +138,7 @@ void DynamicObjectFilter::remove_box(std::uint64_t sequence, const core::Box3& b
   if (!log_.empty() && sequence >= log_.front().sequence && sequence <= log_.back().sequence) {
     // A static era's and a gap's boxes miss the legs and the head as a measured box does.
     LoggedScan& logged = log_[sequence - log_.front().sequence];
-    if (config_.object_ground_clearance_m > 0.0 || config_.object_min_height_m > 0.0) {
-      reach_ground(logged, grown);
-    }
+    reach_ground(logged, grown);
     result_.retroactive_points += logged.remove_inside(grown);
   } else if (log_.empty() || sequence < log_.front().sequence) {
     // The scan already went into the map: remove the voxels instead.
@@ -165,9 +166,7 @@ void DynamicObjectFilter::remove_object_box(LoggedScan& scan, const core::Box3& 
   const auto m = static_cast<float>(config_.object_margin_m);
   core::Box3 grown{{box.min.x() - m, box.min.y() - m, box.min.z()},
                    {box.max.x() + m, box.max.y() + m, box.max.z() + m}};
-  if (config_.object_ground_clearance_m > 0.0 || config_.object_min_height_m > 0.0) {
-    reach_ground(scan, grown);
-  }
+  reach_ground(scan, grown);
   result_.object_box_points += scan.remove_inside(grown, &result_.removed_cells);
   if (config_.object_outer_margin_m > config_.object_margin_m) remove_outer_ring(scan, grown);
 }
@@ -176,27 +175,16 @@ void DynamicObjectFilter::remove_outer_ring(LoggedScan& scan, const core::Box3& 
   // A walker's arm or coat 0.2-0.3 m beside its cluster (12 % of what a moving sensor's crowd
   // kept; docs/BENCHMARK.md, issue 12). A plain 0.3 m margin ate the hall's walls beside
   // people; here a point whose map voxel was seen free_space_protect_count times is structure and
-  // stays.
+  // stays. The points inside grown were removed just before: only the ring between is left.
   const auto extra = static_cast<float>(config_.object_outer_margin_m - config_.object_margin_m);
   const core::Box3 outer{{grown.min.x() - extra, grown.min.y() - extra, grown.min.z()},
                          {grown.max.x() + extra, grown.max.y() + extra, grown.max.z()}};
   const auto protect = static_cast<std::uint32_t>(config_.free_space_protect_count);
-  const bool bounded = scan.bounded_points == scan.points.size() &&
-                       scan.block_bounds.size() == block_count(scan.points.size());
-  for (std::size_t b = 0; b < block_count(scan.points.size()); ++b) {
-    if (bounded && !scan.block_bounds[b].intersects(outer)) continue;
-    const std::size_t end = std::min(scan.points.size(), (b + 1) * LoggedScan::kBlockPoints);
-    for (std::size_t i = b * LoggedScan::kBlockPoints; i < end; ++i) {
-      // Points inside grown were removed just before: only the ring between is left here.
-      if (scan.removed[i] || !outer.contains(scan.points[i])) continue;
-      const MapPoint* voxel = map_.voxel_at(scan.points[i]);
-      if (voxel != nullptr && voxel->count >= protect) continue;
-      scan.removed[i] = 1;
-      ++scan.removed_count;
-      result_.removed_cells.push_back(scan.cells[i]);
-      ++result_.object_box_points;
-    }
-  }
+  const auto structure = [&](const Eigen::Vector3f& p) {
+    const MapPoint* voxel = map_.voxel_at(p);
+    return voxel != nullptr && voxel->count >= protect;
+  };
+  result_.object_box_points += scan.remove_inside(outer, &result_.removed_cells, structure);
 }
 
 void DynamicObjectFilter::reach_ground(const LoggedScan& scan, core::Box3& grown) const {
@@ -204,6 +192,7 @@ void DynamicObjectFilter::reach_ground(const LoggedScan& scan, core::Box3& grown
   // footprint alone often holds no ground (the body hides it, the rings meet the ground metres
   // apart), and then its lowest point is a leg; a metre around it finds the ground beside the
   // feet on any floor flatter than ~10 % over that metre.
+  if (config_.object_ground_clearance_m <= 0.0 && config_.object_min_height_m <= 0.0) return;
   constexpr float kGroundSearchM = 1.0f;
   const float inf = std::numeric_limits<float>::infinity();
   const core::Box3 around{

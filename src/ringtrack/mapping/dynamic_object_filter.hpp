@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <deque>
+#include <functional>
 #include <unordered_map>
 #include <vector>
 
@@ -47,11 +48,15 @@ struct LoggedScan {
   /// Marks the points inside box removed; returns how many were newly removed, and appends
   /// their cells to removed_cells when given. Skips blocks whose bounds miss the box when the
   /// bounds were computed for as many points as there are now, else tests every point.
+  /// `keep`, when given, spares the points it returns true for.
   std::size_t remove_inside(const core::Box3& box,
-                            std::vector<std::uint32_t>* removed_cells = nullptr);
+                            std::vector<std::uint32_t>* removed_cells = nullptr,
+                            const std::function<bool(const Eigen::Vector3f&)>& keep = {});
   /// Lowest height of the points inside box; +infinity when none is. Skips blocks as
   /// remove_inside does.
   [[nodiscard]] float lowest_in(const core::Box3& box) const;
+  /// Whether block_bounds were computed for the points there are now.
+  [[nodiscard]] bool bounds_current() const;
 };
 
 /// What the filter did in one call.
@@ -154,8 +159,8 @@ class DynamicObjectFilter {
   // voxels are not established structure (free_space_protect_count).
   void remove_outer_ring(LoggedScan& scan, const core::Box3& grown);
   // Grows a box down to object_ground_clearance_m above the ground around it and up to
-  // object_min_height_m above that ground (both optional; unchanged when no point is lower).
-  // Measured boxes and, in scans still in the log, static-era and gap boxes.
+  // object_min_height_m above that ground (both optional: 0 = unchanged; unchanged too when no
+  // point is lower). Measured boxes and, in scans still in the log, static-era and gap boxes.
   void reach_ground(const LoggedScan& scan, core::Box3& grown) const;
   [[nodiscard]] core::Box3 inflate(const core::Box3& box) const;
   void release_front();

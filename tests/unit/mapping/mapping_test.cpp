@@ -115,6 +115,22 @@ std::vector<core::Detection> detect(const Frame& f, const std::vector<std::uint3
   return out;
 }
 
+// detect() without the cells `missed(cell, world point)` says the segmentation left out; each
+// box is made anew from the cells kept (centroid and covariance stay the whole object's).
+template <class Missed>
+std::vector<core::Detection> detect_without(const Frame& f,
+                                            const std::vector<std::uint32_t>& wanted,
+                                            Missed missed) {
+  auto detections = detect(f, wanted);
+  for (auto& d : detections) {
+    std::erase_if(d.indices,
+                  [&](std::uint32_t i) { return missed(i, f.pose.to_world(f.scan.point(i))); });
+    d.box = {};
+    for (const auto i : d.indices) d.box.extend(f.pose.to_world(f.scan.point(i)));
+  }
+  return detections;
+}
+
 core::Pose sensor_pose(int k) {
   core::Pose p;
   p.stamp_ns = testing::scan_stamp_ns(k);
@@ -391,17 +407,12 @@ std::size_t head_cells_kept(double object_margin_m) {
   std::size_t kept = 0;
   for (int k = 0; k < 40; ++k) {
     const Frame frame = render({{-2.0 + 0.1 * k, -2.0, 1}}, sensor_pose(k));
-    auto detections = detect(frame, {1});
     std::vector<std::uint32_t> head;
-    for (auto& d : detections) {
-      std::erase_if(d.indices, [&](std::uint32_t i) {
-        const bool is_head = frame.pose.to_world(frame.scan.point(i)).z() > cut_z;
-        if (is_head) head.push_back(i);
-        return is_head;
-      });
-      d.box = {};
-      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
-    }
+    auto detections = detect_without(frame, {1}, [&](std::uint32_t i, const Eigen::Vector3f& p) {
+      const bool is_head = p.z() > cut_z;
+      if (is_head) head.push_back(i);
+      return is_head;
+    });
     const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
     const auto& r = filter.process(frame.scan, frame.pose, detections, hypotheses);
     if (hypotheses.empty() || !hypotheses.front().ever_dynamic) continue;
@@ -452,19 +463,14 @@ OutsideKept cells_outside_the_cluster(double clearance_m, double min_height_m) {
   OutsideKept out;
   for (int k = 0; k < 40; ++k) {
     const Frame frame = render({{-2.0 + 0.1 * k, -2.0, 1}}, sensor_pose(k));
-    auto detections = detect(frame, {1});
     std::vector<std::uint32_t> below, above, lowest;
-    for (auto& d : detections) {
-      std::erase_if(d.indices, [&](std::uint32_t i) {
-        const double z = frame.pose.to_world(frame.scan.point(i)).z();
-        if (z < kGroundZ + 0.01) lowest.push_back(i);
-        if (z < low) below.push_back(i);
-        if (z > high) above.push_back(i);
-        return z < low || z > high;
-      });
-      d.box = {};
-      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
-    }
+    auto detections = detect_without(frame, {1}, [&](std::uint32_t i, const Eigen::Vector3f& p) {
+      const double z = p.z();
+      if (z < kGroundZ + 0.01) lowest.push_back(i);
+      if (z < low) below.push_back(i);
+      if (z > high) above.push_back(i);
+      return z < low || z > high;
+    });
     const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
     const auto& r = filter.process(frame.scan, frame.pose, detections, hypotheses);
     if (hypotheses.empty() || !hypotheses.front().ever_dynamic) continue;
@@ -520,15 +526,10 @@ std::size_t static_era_points_kept(double clearance_m, double min_height_m) {
     const double x = -2.0 + 0.1 * std::max(0, k - kStanding);
     const Frame frame = render({{x, -2.0, 1}}, sensor_pose(k));
     labels[static_cast<std::uint64_t>(k)] = frame.labels;
-    auto detections = detect(frame, {1});
-    for (auto& d : detections) {
-      std::erase_if(d.indices, [&](std::uint32_t i) {
-        const double z = frame.pose.to_world(frame.scan.point(i)).z();
-        return z < kGroundZ + 0.7 || z > kGroundZ + 1.3;
-      });
-      d.box = {};
-      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
-    }
+    auto detections = detect_without(frame, {1}, [](std::uint32_t, const Eigen::Vector3f& p) {
+      const double z = p.z();
+      return z < kGroundZ + 0.7 || z > kGroundZ + 1.3;
+    });
     const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
     filter.process(frame.scan, frame.pose, detections, hypotheses);
     count(filter.released());
@@ -568,17 +569,12 @@ OuterRing outer_ring(double outer_margin_m, int protect_count) {
     const double y = -3.0 + 0.1 * k;
     const double x = std::sqrt(kWallRadius * kWallRadius - y * y) - 0.27;
     const Frame frame = render({{x, y, 1}}, sensor_pose(k));
-    auto detections = detect(frame, {1});
     std::vector<std::uint32_t> dropped;
-    for (auto& d : detections) {
-      std::erase_if(d.indices, [&](std::uint32_t i) {
-        const bool behind = frame.pose.to_world(frame.scan.point(i)).y() > y;
-        if (behind) dropped.push_back(i);
-        return behind;
-      });
-      d.box = {};
-      for (const auto i : d.indices) d.box.extend(frame.pose.to_world(frame.scan.point(i)));
-    }
+    auto detections = detect_without(frame, {1}, [&](std::uint32_t i, const Eigen::Vector3f& p) {
+      const bool behind = p.y() > y;
+      if (behind) dropped.push_back(i);
+      return behind;
+    });
     const auto& hypotheses = tracker.update(detections, frame.pose.stamp_ns);
     const auto& r = filter.process(frame.scan, frame.pose, detections, hypotheses);
     if (hypotheses.empty() || !hypotheses.front().ever_dynamic || detections.empty()) continue;
