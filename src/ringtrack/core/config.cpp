@@ -365,6 +365,11 @@ class Schema {
     number("relink_max_gap_s", t.relink_max_gap_s, 0.0, 1e6,
            "identity: ... when that hypothesis was last measured at most this long before the "
            "new one's birth (s)");
+    boolean("rest_pairing", t.rest_pairing,
+            "identity: a hypothesis that has moved and missed its last scan(s) may also pair, "
+            "at rest, with a detection of three or more points where it was last measured, "
+            "whichever costs less than at its prediction (a walker who stopped while hidden or "
+            "merged with the structure beside it; its velocity restarts at zero)");
 
     auto& m = c.mapping;
     section_ = "mapping";

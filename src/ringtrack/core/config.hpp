@@ -129,6 +129,8 @@ struct TrackingConfig {
   double relink_distance_m{1.0};  // a newly confirmed hypothesis takes the id of one lost this
                                   // close to its birth (extrapolated; 0 = off)
   double relink_max_gap_s{2.0};   // ... when it was last measured at most this long before
+  bool rest_pairing{true};  // a coasting hypothesis that has moved may also pair at rest where it
+                            // was last measured (a walker who stopped while unmeasured)
 };
 
 /// Dynamic-object filter and static map (paper III.E).

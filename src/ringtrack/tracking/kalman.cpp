@@ -56,4 +56,9 @@ void ConstantVelocityKalman::cap_speed(double max_speed_mps) {
   if (speed > max_speed_mps && speed > 0.0) x_.tail<3>() *= max_speed_mps / speed;
 }
 
+void ConstantVelocityKalman::stop_at(const Eigen::Vector3d& position) {
+  x_.head<3>() = position;
+  x_.tail<3>().setZero();
+}
+
 }  // namespace ringtrack::tracking

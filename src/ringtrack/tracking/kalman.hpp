@@ -30,6 +30,9 @@ class ConstantVelocityKalman {
   void add_vertical_variance(double variance_m2) { p_(2, 2) += variance_m2; }
   /// Scales the velocity down to max_speed_mps when faster (its direction is kept).
   void cap_speed(double max_speed_mps);
+  /// Puts the object at rest at position (velocity zero), keeping the covariance: the state a
+  /// walker is in when it stopped where it was last measured.
+  void stop_at(const Eigen::Vector3d& position);
 
   /// Position estimate (m).
   [[nodiscard]] Eigen::Vector3d position() const { return x_.head<3>(); }

@@ -244,6 +244,10 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
       coast(hypotheses_[i]);
       look_for_missed(hypotheses_[i]);
     } else {
+      if (paired_at_rest_[i]) {
+        hypotheses_[i].filter.stop_at(hypotheses_[i].last_detection.centroid.cast<double>());
+        ++stats_.paired_at_rest;
+      }
       correct(hypotheses_[i], detections[d], d);
       ++stats_.assigned;
     }
@@ -291,6 +295,7 @@ void Tracker::assign(const std::vector<core::Detection>& detections) {
   const auto rows = static_cast<Eigen::Index>(hypotheses_.size());
   const auto cols = static_cast<Eigen::Index>(detections.size());
   col_of_row_.assign(hypotheses_.size(), kUnassigned);
+  paired_at_rest_.assign(hypotheses_.size(), 0);
   if (rows == 0 || cols == 0) return;
   h_terms_.clear();
   d_terms_.clear();
@@ -308,7 +313,51 @@ void Tracker::assign(const std::vector<core::Detection>& detections) {
       cost_(i, j) = pair_cost_terms(config_, g, h_terms_[i], d_terms_[j]);
     }
   }
+  add_rest_alternatives(detections);
   col_of_row_ = solve_gated_assignment(cost_, g);
+  if (rest_cheaper_.empty()) return;
+  for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
+    const int j = col_of_row_[i];
+    if (j != kUnassigned) {
+      paired_at_rest_[i] = rest_cheaper_[i * detections.size() + static_cast<std::size_t>(j)];
+    }
+  }
+}
+
+bool Tracker::may_have_stopped(const Hypothesis& h) const {
+  return config_.rest_pairing && h.ever_dynamic && h.missed_scans > 0 && h.hits > 0 &&
+         !h.filter.velocity().head<2>().isZero();
+}
+
+void Tracker::add_rest_alternatives(const std::vector<core::Detection>& detections) {
+  // A walker that stops while unmeasured (hidden, or merged with the structure it stopped
+  // beside) is not where the constant-velocity prediction puts it: that coasted on at walking
+  // speed, and a static hypothesis on the structure beside the walker took its detection (an
+  // identity switch, and a track that never turned dynamic again; the hall, docs/BENCHMARK.md).
+  // So a coasting hypothesis that has moved may also pair at rest where it was last measured,
+  // whichever costs less; update() then restarts its filter there.
+  rest_cheaper_.clear();
+  const std::size_t cols = detections.size();
+  const double g = gate();
+  for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
+    const Hypothesis& h = hypotheses_[i];
+    if (!may_have_stopped(h)) continue;
+    if (rest_cheaper_.empty()) rest_cheaper_.assign(hypotheses_.size() * cols, 0);
+    const GaussianTerm rest =
+        make_gaussian_term(h.last_detection.centroid.cast<double>(), h.position_covariance());
+    for (std::size_t j = 0; j < cols; ++j) {
+      // A body, not one or two points of clutter near where a track was last seen: far clutter
+      // kept alive this way turned dynamic (the town's false positives, docs/BENCHMARK.md).
+      if (detections[j].relaxed || detections[j].indices.size() <= kFewPoints) continue;
+      const double c = pair_cost_terms(config_, g, rest, d_terms_[j]);
+      const auto r = static_cast<Eigen::Index>(i);
+      const auto k = static_cast<Eigen::Index>(j);
+      if (c < cost_(r, k)) {
+        cost_(r, k) = c;
+        rest_cheaper_[i * cols + j] = 1;
+      }
+    }
+  }
 }
 
 void Tracker::reassociate(const std::vector<core::Detection>& detections) {

@@ -84,6 +84,7 @@ struct TrackerStats {
   int deleted_seen_through{0};  ///< missed hypotheses whose predicted points the scan saw through
   int relaxed_unassigned{0};    ///< relaxed detections that paired with nothing (no new track)
   int relinked{0};              ///< confirmed hypotheses that took over a lost one's id
+  int paired_at_rest{0};  ///< coasting hypotheses paired at rest where last measured (rest_pairing)
 };
 
 /// Tracks objects from the detections of successive scans.
@@ -131,6 +132,8 @@ class Tracker {
  private:
   void predict_all(double dt_s);
   void assign(const std::vector<core::Detection>& detections);
+  void add_rest_alternatives(const std::vector<core::Detection>& detections);
+  [[nodiscard]] bool may_have_stopped(const Hypothesis& h) const;
   void reassociate(const std::vector<core::Detection>& detections);
   void correct(Hypothesis& h, const core::Detection& d, int index);
   void coast(Hypothesis& h);
@@ -173,6 +176,9 @@ class Tracker {
   std::vector<Eigen::Matrix3d> update_r_;       // Kalman update noise per detection
   std::vector<GaussianTerm> h_terms_, d_terms_;
   std::vector<int> col_of_row_;
+  std::vector<char> rest_cheaper_;    // hypotheses x detections: pairing at rest cost less; empty
+                                      // when no hypothesis may have stopped
+  std::vector<char> paired_at_rest_;  // per hypothesis: paired at rest where last measured
   std::vector<char> detection_used_;  // per detection: paired with a hypothesis this update
   struct LeftoverPair {               // reassociate(): a candidate pair and its distance
     double distance;

@@ -205,5 +205,55 @@ TEST(TrackerRelink, AWalkerMergedAwayWhileCrossingKeepsItsId) {
   EXPECT_EQ(on, std::set<std::uint64_t>{b_before});
 }
 
+// A walker who stops while unmeasured (hidden, or one cluster with the pillar it stopped
+// beside) stands where it was last measured, not where its velocity carried the prediction.
+// It walks along x at 2 m/s, is missed for five scans (the prediction runs on a metre) and is
+// then measured standing 0.1 m beyond its last detection with `points` points. Relinking is off,
+// so only tracking.rest_pairing can keep the id. Returns the ids reported for it afterwards.
+struct StopResult {
+  std::uint64_t id_before{0};
+  std::set<std::uint64_t> ids_after;
+  int paired_at_rest{0};
+};
+
+StopResult walk_and_stop_unseen(bool rest_pairing, std::uint32_t points) {
+  core::TrackingConfig config = relinking(0.0);
+  config.rest_pairing = rest_pairing;
+  Runner run(config);
+  StopResult result;
+  for (int k = 0; k < 30; ++k) run.step({at(0.2 * k, 0.0)});
+  result.id_before = run.id_of(0);
+  EXPECT_TRUE(run.dynamic_of(0));
+  for (int k = 0; k < 5; ++k) run.step({});
+  testing::PersonShape shape;
+  shape.points = points;
+  for (int k = 0; k < 20; ++k) {
+    std::vector<core::Detection> detections{person_detection(at(5.9, 0.0), shape)};
+    run.tracker.update(detections, testing::scan_stamp_ns(run.scan++));
+    result.paired_at_rest += run.tracker.stats().paired_at_rest;
+    const Hypothesis* h = run.of(0);
+    if (h != nullptr && h->reported) result.ids_after.insert(h->id);
+  }
+  return result;
+}
+
+TEST(TrackerRestPairing, AWalkerWhoStopsUnseenKeepsItsId) {
+  const StopResult off = walk_and_stop_unseen(false, 30);
+  ASSERT_FALSE(off.ids_after.empty());
+  EXPECT_FALSE(off.ids_after.count(off.id_before))
+      << "without the rule the prediction has run on and a new track takes the walker";
+  EXPECT_EQ(off.paired_at_rest, 0);
+  const StopResult on = walk_and_stop_unseen(true, 30);
+  EXPECT_EQ(on.ids_after, std::set<std::uint64_t>{on.id_before});
+  EXPECT_EQ(on.paired_at_rest, 1) << "once at rest, the filter predicts it there";
+}
+
+// One or two points where a track was last seen may be any clutter: they are never paired at
+// rest (only the ordinary association, with its widened few-point noise, may take them).
+TEST(TrackerRestPairing, TwoPointsWhereAWalkerStoppedAreNotPairedAtRest) {
+  EXPECT_EQ(walk_and_stop_unseen(true, 2).paired_at_rest, 0);
+  EXPECT_EQ(walk_and_stop_unseen(true, 3).paired_at_rest, 1) << "three points are a body";
+}
+
 }  // namespace
 }  // namespace ringtrack::tracking
