@@ -467,15 +467,12 @@ BeamRay VisibilityQuery::cell_ray(int ring, int column) const {
   return {f.world_R_sensor.col(2) * geo_->offset_m[r] + f.world_t_sensor, f.world_R_sensor * d};
 }
 
-template <typename Visit>
-void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& visit) const {
-  check_margin(margin_m);
-  if (world_box.empty() || !world_box.min.allFinite() || !world_box.max.allFinite()) return;
+VisibilityQuery::BeamBand VisibilityQuery::beam_band(const Box3& world_box) const {
   const Eigen::Vector3d lo = world_box.min.cast<double>();
   const Eigen::Vector3d hi = world_box.max.cast<double>();
   // A moving sensor's beams start up to `reach` from the scan pose's origin and point up to
   // `turn` away from its directions: candidates come from the box grown by the reach, in an
-  // azimuth and elevation band widened by the turn; the exact slab test below decides.
+  // azimuth and elevation band widened by the turn; the exact slab test of visit_box decides.
   const double reach = moving_ ? velocity_.norm() * sweep_s_ : 0.0;
   const double turn = moving_ ? spin_rate_ * sweep_s_ : 0.0;
   const Eigen::Vector3d grown_lo = lo.array() - reach;
@@ -503,24 +500,25 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
   std::array<double, 8> sorted = corner_az;
   std::sort(sorted.begin(), sorted.end());
   double widest = sorted[0] + kTwoPi - sorted[7];
-  double az_start = sorted[0];
+  BeamBand band;
+  band.az_start = sorted[0];
   for (std::size_t k = 0; k + 1 < 8; ++k) {
     if (sorted[k + 1] - sorted[k] > widest) {
       widest = sorted[k + 1] - sorted[k];
-      az_start = sorted[k + 1];
+      band.az_start = sorted[k + 1];
     }
   }
   // A turn of `turn` moves a direction's azimuth by at most turn / cos(elevation) (small turns).
   const double steepest = geo_->max_abs_elevation_rad + turn;
   const double turn_az = turn == 0.0 ? 0.0 : 1.01 * turn / std::cos(std::min(steepest, 1.4));
-  const bool all_azimuths =
+  band.all_azimuths =
       widest <= std::numbers::pi || (turn > 0.0 && (steepest >= 1.4 || widest <= 2.0 * turn_az));
-  az_start -= turn_az;
-  const double az_span = kTwoPi - widest + 2.0 * turn_az;
+  band.az_start -= turn_az;
+  band.az_span = kTwoPi - widest + 2.0 * turn_az;
   // Nearest horizontal distance of the box to the z axis: its footprint's boundary lies on the
   // projected edges.
   double rho_min = 0.0;
-  if (!all_azimuths) {
+  if (!band.all_azimuths) {
     rho_min = std::numeric_limits<double>::infinity();
     for (int k = 0; k < 8; ++k) {
       for (int bit : {1, 2, 4}) {
@@ -533,21 +531,31 @@ void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& 
   // Elevation band over every beam origin (the lowest origin sees the box highest).
   const double dz_hi = z_max - geo_->offset_min_m;
   const double dz_lo = z_min - geo_->offset_max_m;
-  const double el_max = std::atan2(dz_hi, dz_hi > 0.0 ? rho_min : rho_max) + turn + kSlackRad;
-  const double el_min = std::atan2(dz_lo, dz_lo < 0.0 ? rho_min : rho_max) - turn - kSlackRad;
+  band.el_max = std::atan2(dz_hi, dz_hi > 0.0 ? rho_min : rho_max) + turn + kSlackRad;
+  band.el_min = std::atan2(dz_lo, dz_lo < 0.0 ? rho_min : rho_max) - turn - kSlackRad;
+  return band;
+}
 
+template <typename Visit>
+void VisibilityQuery::visit_box(const Box3& world_box, double margin_m, Visit&& visit) const {
+  check_margin(margin_m);
+  if (world_box.empty() || !world_box.min.allFinite() || !world_box.max.allFinite()) return;
+  const Eigen::Vector3d lo = world_box.min.cast<double>();
+  const Eigen::Vector3d hi = world_box.max.cast<double>();
+  const BeamBand band = beam_band(world_box);
+  const bool all_azimuths = band.all_azimuths;
   const auto n = geo_->sorted_az.size();
   for (int r = 0; r < rings_; ++r) {
     const auto ri = static_cast<std::size_t>(r);
-    if (geo_->elevation_rad[ri] < el_min) continue;
-    if (geo_->elevation_rad[ri] > el_max) break;
+    if (geo_->elevation_rad[ri] < band.el_min) continue;
+    if (geo_->elevation_rad[ri] > band.el_max) break;
     std::size_t first = 0;
     std::size_t count = n;
     double start = 0.0;
     double span = kTwoPi;
     if (!all_azimuths) {
-      start = wrap_two_pi(az_start - geo_->az_offset_rad[ri] - kSlackRad);
-      span = az_span + 2.0 * kSlackRad;
+      start = wrap_two_pi(band.az_start - geo_->az_offset_rad[ri] - kSlackRad);
+      span = band.az_span + 2.0 * kSlackRad;
       first = static_cast<std::size_t>(
           std::lower_bound(geo_->sorted_az.begin(), geo_->sorted_az.end(), start) -
           geo_->sorted_az.begin());

@@ -209,6 +209,17 @@ class VisibilityQuery {
   // Ring, column and beam distance of a point given in the frame of the sensor that fired.
   [[nodiscard]] std::optional<Located> locate_sensor_point(const Eigen::Vector3d& p) const;
   [[nodiscard]] std::optional<Located> locate(const Eigen::Vector3d& world_point) const;
+  // The beams that can reach a box: its azimuth band (start and span, before each ring's azimuth
+  // offset; every azimuth when the sensor's z axis meets the box) and elevation band, widened
+  // for a moving sensor by its travel and turn during the sweep.
+  struct BeamBand {
+    bool all_azimuths{true};
+    double az_start{0.0};
+    double az_span{0.0};
+    double el_min{0.0};
+    double el_max{0.0};
+  };
+  [[nodiscard]] BeamBand beam_band(const Box3& world_box) const;
   // Calls visit(cell, verdict, entry, exit) for every beam through the box until it returns false.
   template <typename Visit>
   void visit_box(const Box3& world_box, double margin_m, Visit&& visit) const;

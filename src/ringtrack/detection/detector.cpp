@@ -230,19 +230,18 @@ void Detector::split_cluster(const Frame& frame) {
   }
 }
 
-bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end, double& cut) {
+Detector::SplitAxis Detector::project_on_principal_axis(std::size_t begin, std::size_t end) {
   const std::size_t m = end - begin;
-  if (m < 2) return false;
-  double mx = 0.0, my = 0.0;
+  SplitAxis axis;
   for (std::size_t k = begin; k < end; ++k) {
-    mx += world_[k].x();
-    my += world_[k].y();
+    axis.mx += world_[k].x();
+    axis.my += world_[k].y();
   }
-  mx /= static_cast<double>(m);
-  my /= static_cast<double>(m);
+  axis.mx /= static_cast<double>(m);
+  axis.my /= static_cast<double>(m);
   double sxx = 0.0, sxy = 0.0, syy = 0.0;
   for (std::size_t k = begin; k < end; ++k) {
-    const double dx = world_[k].x() - mx, dy = world_[k].y() - my;
+    const double dx = world_[k].x() - axis.mx, dy = world_[k].y() - axis.my;
     sxx += dx * dx;
     sxy += dx * dy;
     syy += dy * dy;
@@ -251,41 +250,36 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
   // the axis points to +x (a canonical sign: the profile and its tie-breaks do not depend on
   // how the axis was found).
   const double angle = 0.5 * std::atan2(2.0 * sxy, sxx - syy);
-  const double ax = std::cos(angle), ay = std::sin(angle);
+  axis.ax = std::cos(angle);
+  axis.ay = std::sin(angle);
   projection_.resize(m);
-  double p_min = std::numeric_limits<double>::infinity(), p_max = -p_min;
+  axis.p_min = std::numeric_limits<double>::infinity();
+  axis.p_max = -axis.p_min;
   for (std::size_t k = begin; k < end; ++k) {
-    const double p = ax * (world_[k].x() - mx) + ay * (world_[k].y() - my);
+    const double p = axis.ax * (world_[k].x() - axis.mx) + axis.ay * (world_[k].y() - axis.my);
     projection_[k - begin] = p;
-    p_min = std::min(p_min, p);
-    p_max = std::max(p_max, p);
+    axis.p_min = std::min(axis.p_min, p);
+    axis.p_max = std::max(axis.p_max, p);
   }
-  const double extent = p_max - p_min;
-  if (!(extent > config_.split_min_width_m)) return false;
-  // People side by side spread across the line of sight. Along it, the points are spaced by
-  // the rings, not the columns: sparse samples of sloped or deep structures that the footprint
-  // below cannot model, and people one behind the other are the join rule's business.
-  const double tx = frame.translation.x(), ty = frame.translation.y();
-  const double cx = mx - tx, cy = my - ty;
-  const double centre_distance = std::hypot(cx, cy);
-  if (!(std::abs(ay * cx - ax * cy) >= kSplitMinAxisCos * centre_distance)) return false;
+  return axis;
+}
 
+void Detector::fill_coverage(const Frame& frame, const SplitAxis& axis, std::size_t begin,
+                             std::size_t m, double sub, std::size_t sub_bins) {
   // Coverage profile along the axis: each point stands for the stretch of surface between it
   // and its neighbouring columns, its footprint (horizontal distance * azimuth step, longer as
   // the axis turns away from the tangential direction, at most 4x), and spreads its unit mass
   // evenly over it. A uniformly sampled surface then has a flat profile whatever the range,
   // angle and bin width (point counts per bin alias: 1 column next to 2), and a gap between two
   // people is a hole as wide as the columns missing there.
-  const double sub = config_.split_bin_m / kSubBins;
-  const auto sub_bins = static_cast<std::size_t>(extent / sub) + 1;
-  if (sub_bins < 3 * kSubBins) return false;  // no window with a full window either side
+  const double tx = frame.translation.x(), ty = frame.translation.y();
   coverage_.assign(sub_bins, 0.0);
   for (std::size_t k = 0; k < m; ++k) {
     const double dx = world_[begin + k].x() - tx, dy = world_[begin + k].y() - ty;
     const double h = std::hypot(dx, dy);
     const double footprint =
-        h * h * frame.azimuth_step_rad / std::max(std::abs(ay * dx - ax * dy), 0.25 * h);
-    const double u = (projection_[k] - p_min) / sub;
+        h * h * frame.azimuth_step_rad / std::max(std::abs(axis.ay * dx - axis.ax * dy), 0.25 * h);
+    const double u = (projection_[k] - axis.p_min) / sub;
     const double half = 0.5 * footprint / sub;
     if (!(half > 1e-9)) {
       coverage_[std::min(static_cast<std::size_t>(u), sub_bins - 1)] += 1.0;
@@ -300,9 +294,12 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
       if (overlap > 0.0) coverage_[j] += overlap * density;
     }
   }
+}
+
+std::size_t Detector::deepest_valley() {
   // Sliding windows of one bin (kSubBins sub-bins), one sub-bin apart; a valley window's peaks
   // are the highest windows entirely left and entirely right of it.
-  const std::size_t windows = sub_bins - kSubBins + 1;
+  const std::size_t windows = coverage_.size() - kSubBins + 1;
   window_.resize(windows);
   for (std::size_t j = 0; j < windows; ++j) {
     double w = 0.0;
@@ -329,8 +326,29 @@ bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end
       best_score = std::min(score, best_score);
     }
   }
-  if (best == windows) return false;
-  cut = p_min + (static_cast<double>(best) + 0.5 * kSubBins) * sub;
+  return best;
+}
+
+bool Detector::find_split(const Frame& frame, std::size_t begin, std::size_t end, double& cut) {
+  const std::size_t m = end - begin;
+  if (m < 2) return false;
+  const SplitAxis axis = project_on_principal_axis(begin, end);
+  const double extent = axis.p_max - axis.p_min;
+  if (!(extent > config_.split_min_width_m)) return false;
+  // People side by side spread across the line of sight. Along it, the points are spaced by
+  // the rings, not the columns: sparse samples of sloped or deep structures that the footprint
+  // profile cannot model, and people one behind the other are the join rule's business.
+  const double cx = axis.mx - frame.translation.x(), cy = axis.my - frame.translation.y();
+  const double centre_distance = std::hypot(cx, cy);
+  if (!(std::abs(axis.ay * cx - axis.ax * cy) >= kSplitMinAxisCos * centre_distance)) return false;
+
+  const double sub = config_.split_bin_m / kSubBins;
+  const auto sub_bins = static_cast<std::size_t>(extent / sub) + 1;
+  if (sub_bins < 3 * kSubBins) return false;  // no window with a full window either side
+  fill_coverage(frame, axis, begin, m, sub, sub_bins);
+  const std::size_t best = deepest_valley();
+  if (best == window_.size()) return false;
+  cut = axis.p_min + (static_cast<double>(best) + 0.5 * kSubBins) * sub;
   // Both parts must be clusters in their own right.
   std::size_t left = 0;
   for (std::size_t k = 0; k < m; ++k) left += projection_[k] < cut ? 1 : 0;

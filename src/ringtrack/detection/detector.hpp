@@ -132,6 +132,17 @@ class Detector {
                                       std::size_t begin, std::size_t end) const;
   void split_cluster(const Frame& frame);
   bool find_split(const Frame& frame, std::size_t begin, std::size_t end, double& cut);
+  // find_split's steps: the part's horizontal principal axis (fills projection_), its coverage
+  // profile along that axis (coverage_), and the deepest valley window (window_.size() if none).
+  struct SplitAxis {
+    double mx{0.0}, my{0.0};        // centroid (world x, y)
+    double ax{1.0}, ay{0.0};        // unit axis, pointing to +x
+    double p_min{0.0}, p_max{0.0};  // extent of the projections
+  };
+  SplitAxis project_on_principal_axis(std::size_t begin, std::size_t end);
+  void fill_coverage(const Frame& frame, const SplitAxis& axis, std::size_t begin, std::size_t m,
+                     double sub, std::size_t sub_bins);
+  std::size_t deepest_valley();
   struct PartShape;  // the object model's view of a part
   [[nodiscard]] PartShape measure_part(const core::OrganizedScan& scan, const Frame& frame,
                                        std::size_t begin, std::size_t end) const;
