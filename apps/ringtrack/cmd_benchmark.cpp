@@ -293,6 +293,111 @@ void run_benchmark(const BenchmarkOptions& o) {
   status_file.finish(StopSignals::signal_name());
 }
 
+// --save-tracks: the same files as `simulate` + `run` write, for `ringtrack eval` and plots.
+struct SavedTracks {
+  io::TracksCsvWriter tracks;
+  io::ObjectsCsvWriter objects;
+
+  SavedTracks(const fs::path& out, const std::string& stem)
+      : tracks(out / ("tracks-" + stem + ".csv")), objects(out / ("objects-" + stem + ".csv")) {}
+
+  void write(const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
+    const auto k = static_cast<std::uint64_t>(scan.index);
+    for (const tracking::Hypothesis& h : r.hypotheses) {
+      if (h.reported) tracks.write(runner::track_row(k, scan.scan.stamp_ns, h, r.origin));
+    }
+    for (const sim::ObjectTruth& t : scan.objects)
+      objects.write(object_row(k, scan.scan.stamp_ns, t));
+  }
+};
+
+// Runs the planned cases in order until all ran or a signal stopped one (which is dropped with
+// its saved tracks: the outputs cover the finished runs only); writes timing.csv.
+std::vector<BenchmarkCase> run_cases(const BenchmarkOptions& o, const core::Config& config,
+                                     const std::vector<experiment::PlannedRun>& runs,
+                                     experiment::BenchmarkCaseOptions& case_options,
+                                     io::RunStatus& status) {
+  const fs::path out = o.out;
+  const bool progress = !o.quiet && !o.json;
+  std::vector<BenchmarkCase> cases;
+  io::OutputFile timing(out / "timing.csv");
+  timing.write(experiment::kBenchmarkTimingHeader);
+  for (const experiment::PlannedRun& run : runs) {
+    if (StopSignals::requested()) break;
+    const sim::Scenario& s = run.scenario;
+    if (progress) {
+      std::cerr << "scenario " << (run.validation ? std::string("V") : std::to_string(s.number))
+                << " " << s.name << (run.moving() ? " (moving)" : " (static)") << " ..."
+                << std::flush;
+    }
+    std::optional<SavedTracks> saved;
+    case_options.on_scan = {};
+    if (o.save_tracks) {
+      saved.emplace(out, run.stem());
+      case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
+        saved->write(scan, r);
+      };
+    }
+    BenchmarkCase c = experiment::run_benchmark_case(s, config, case_options);
+    if (c.interrupted) {
+      if (saved) {
+        saved->tracks.discard();
+        saved->objects.discard();
+      }
+      if (progress) std::cerr << " stopped by " << StopSignals::signal_name() << "\n";
+      break;
+    }
+    c.validation = run.validation;
+    status.scans_read += static_cast<std::uint64_t>(c.scans);
+    status.scans_processed += static_cast<std::uint64_t>(c.scans);
+    if (saved) {
+      saved->tracks.close();
+      saved->objects.close();
+    }
+    if (progress) {
+      std::cerr << " " << c.scans << " scans, MOTA " << fixed(c.tracking.summary.mota(), 3)
+                << ", simulate " << fixed(c.simulate_s, 1) << " s, pipeline "
+                << fixed(c.pipeline_s, 1) << " s\n";
+    }
+    timing.write(experiment::timing_rows(c, case_label(c)));
+    cases.push_back(std::move(c));
+  }
+  timing.close();
+  return cases;
+}
+
+// The one-line-per-group summary on stdout.
+void print_summary(const BenchmarkOptions& o, std::size_t runs_planned,
+                   const std::vector<BenchmarkCase>& cases, const std::vector<Aggregate>& groups,
+                   double wall_s, const std::string& stopped_by, bool plotted) {
+  std::cout << "benchmark of " << cases.size() << " runs in " << fixed(wall_s, 1) << " s";
+  if (!stopped_by.empty()) {
+    std::cout << " (interrupted by " << stopped_by << " after " << cases.size() << " of "
+              << runs_planned << " runs: the figures cover these runs only)";
+  }
+  std::cout << "\n";
+  for (const Aggregate& g : groups) {
+    std::cout << "  " << g.label << ": MOTA " << fixed(g.mot.mota(), 3) << ", MOTP "
+              << fixed(g.mot.motp(), 3) << " m (x-y " << fixed(g.mot.horizontal_motp(), 3)
+              << ", z bias " << fixed(g.mot.mean_vertical_error(), 3) << "), MT/PT/ML "
+              << fixed(g.mot.mostly_tracked_ratio(), 2) << "/"
+              << fixed(g.mot.partially_tracked_ratio(), 2) << "/"
+              << fixed(g.mot.mostly_lost_ratio(), 2) << ", IDSW " << g.mot.switches << ", FP "
+              << g.mot.false_positives << ", FN " << g.mot.misses << ", map preservation "
+              << fixed(g.map.preservation_rate(), 4) << ", rejection "
+              << fixed(g.map.rejection_rate(), 4) << "; moving objects only: MOTA "
+              << fixed(g.moving_only.mota(), 3) << ", FP " << g.moving_only.false_positives
+              << ", FN " << g.moving_only.misses;
+    if (o.person_figures) {
+      std::cout << "; person mode: MOTA " << fixed(g.person.mota(), 3) << ", FP "
+                << g.person.false_positives << ", FN " << g.person.misses;
+    }
+    std::cout << "\n";
+  }
+  std::cout << "outputs: " << o.out << "/{report.md,results.json,timing.csv,config.yaml,run.json"
+            << (plotted ? ",stage_times.png" : "") << "}\n";
+}
+
 void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
                     const std::vector<experiment::PlannedRun>& runs, io::RunStatus& status) {
   const fs::path out = o.out;
@@ -306,61 +411,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   case_options.person_figures = o.person_figures;
   case_options.interrupt = &StopSignals::stop_flag();
   const auto start = std::chrono::steady_clock::now();
-  std::vector<BenchmarkCase> cases;
-  io::OutputFile timing(out / "timing.csv");
-  timing.write(experiment::kBenchmarkTimingHeader);
-  for (const experiment::PlannedRun& run : runs) {
-    if (StopSignals::requested()) break;
-    const sim::Scenario& s = run.scenario;
-    const bool moving = run.moving();
-    if (!o.quiet && !o.json) {
-      std::cerr << "scenario " << (run.validation ? std::string("V") : std::to_string(s.number))
-                << " " << s.name << (moving ? " (moving)" : " (static)") << " ..." << std::flush;
-    }
-    // --save-tracks: the same files as `simulate` + `run` write, for `ringtrack eval` and plots.
-    std::unique_ptr<io::TracksCsvWriter> tracks_csv;
-    std::unique_ptr<io::ObjectsCsvWriter> objects_csv;
-    case_options.on_scan = {};
-    if (o.save_tracks) {
-      const std::string stem = run.stem();
-      tracks_csv = std::make_unique<io::TracksCsvWriter>(out / ("tracks-" + stem + ".csv"));
-      objects_csv = std::make_unique<io::ObjectsCsvWriter>(out / ("objects-" + stem + ".csv"));
-      case_options.on_scan = [&](const sim::SimulatedScan& scan, const pipeline::FrameResult& r) {
-        const auto k = static_cast<std::uint64_t>(scan.index);
-        for (const tracking::Hypothesis& h : r.hypotheses) {
-          if (h.reported) tracks_csv->write(runner::track_row(k, scan.scan.stamp_ns, h, r.origin));
-        }
-        for (const sim::ObjectTruth& t : scan.objects) {
-          objects_csv->write(object_row(k, scan.scan.stamp_ns, t));
-        }
-      };
-    }
-    BenchmarkCase c = experiment::run_benchmark_case(s, config, case_options);
-    if (c.interrupted) {
-      // A run cut short has no figures to report: the outputs cover the finished runs only.
-      if (tracks_csv) {
-        tracks_csv->discard();
-        objects_csv->discard();
-      }
-      if (!o.quiet && !o.json) std::cerr << " stopped by " << StopSignals::signal_name() << "\n";
-      break;
-    }
-    c.validation = run.validation;
-    status.scans_read += static_cast<std::uint64_t>(c.scans);
-    status.scans_processed += static_cast<std::uint64_t>(c.scans);
-    if (tracks_csv) {
-      tracks_csv->close();
-      objects_csv->close();
-    }
-    if (!o.quiet && !o.json) {
-      std::cerr << " " << c.scans << " scans, MOTA " << fixed(c.tracking.summary.mota(), 3)
-                << ", simulate " << fixed(c.simulate_s, 1) << " s, pipeline "
-                << fixed(c.pipeline_s, 1) << " s\n";
-    }
-    timing.write(experiment::timing_rows(c, case_label(c)));
-    cases.push_back(std::move(c));
-  }
-  timing.close();
+  const std::vector<BenchmarkCase> cases = run_cases(o, config, runs, case_options, status);
   if (cases.empty()) {
     throw core::InputError("benchmark stopped by " + StopSignals::signal_name() +
                            " before its first run finished: nothing to report");
@@ -393,32 +444,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
     std::cout << j.dump(2) << "\n";
     return;
   }
-  std::cout << "benchmark of " << cases.size() << " runs in " << fixed(wall_s, 1) << " s";
-  if (!stopped_by.empty()) {
-    std::cout << " (interrupted by " << stopped_by << " after " << cases.size() << " of "
-              << runs.size() << " runs: the figures cover these runs only)";
-  }
-  std::cout << "\n";
-  for (const Aggregate& g : groups) {
-    std::cout << "  " << g.label << ": MOTA " << fixed(g.mot.mota(), 3) << ", MOTP "
-              << fixed(g.mot.motp(), 3) << " m (x-y " << fixed(g.mot.horizontal_motp(), 3)
-              << ", z bias " << fixed(g.mot.mean_vertical_error(), 3) << "), MT/PT/ML "
-              << fixed(g.mot.mostly_tracked_ratio(), 2) << "/"
-              << fixed(g.mot.partially_tracked_ratio(), 2) << "/"
-              << fixed(g.mot.mostly_lost_ratio(), 2) << ", IDSW " << g.mot.switches << ", FP "
-              << g.mot.false_positives << ", FN " << g.mot.misses << ", map preservation "
-              << fixed(g.map.preservation_rate(), 4) << ", rejection "
-              << fixed(g.map.rejection_rate(), 4) << "; moving objects only: MOTA "
-              << fixed(g.moving_only.mota(), 3) << ", FP " << g.moving_only.false_positives
-              << ", FN " << g.moving_only.misses;
-    if (o.person_figures) {
-      std::cout << "; person mode: MOTA " << fixed(g.person.mota(), 3) << ", FP "
-                << g.person.false_positives << ", FN " << g.person.misses;
-    }
-    std::cout << "\n";
-  }
-  std::cout << "outputs: " << o.out << "/{report.md,results.json,timing.csv,config.yaml,run.json"
-            << (plotted ? ",stage_times.png" : "") << "}\n";
+  print_summary(o, runs.size(), cases, groups, wall_s, stopped_by, plotted);
 }
 
 }  // namespace
