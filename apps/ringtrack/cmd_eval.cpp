@@ -140,7 +140,7 @@ eval::MapCounts evaluate_filtered(const fs::path& sequence_dir, const fs::path& 
 
 // A sequence folder stands for its ground-truth file inside.
 fs::path resolve_gt(const std::string& arg, bool motchallenge, std::string& name) {
-  const fs::path p(arg);
+  fs::path p(arg);
   // Names come from the absolute path so that "." or "objects.csv" still name the folder.
   std::error_code ec;
   fs::path full = fs::weakly_canonical(fs::absolute(p), ec);
@@ -148,7 +148,7 @@ fs::path resolve_gt(const std::string& arg, bool motchallenge, std::string& name
   if (fs::is_directory(p)) {
     name =
         full.filename().empty() ? full.parent_path().filename().string() : full.filename().string();
-    const fs::path file = motchallenge ? p / "gt" / "gt.txt" : p / "objects.csv";
+    fs::path file = motchallenge ? p / "gt" / "gt.txt" : p / "objects.csv";
     if (!fs::is_regular_file(file)) {
       throw core::InputError(
           arg + ": sequence folder without " +

@@ -119,17 +119,20 @@ void VisibilityCounts::add(Visibility v) {
   }
 }
 
-BeamGeometry::BeamGeometry(const OrganizedScan& scan, const SensorModel& model)
-    : rings(scan.rings()), columns(scan.columns()), column_azimuth_rad(scan.column_azimuth_rad) {
+namespace {
+
+// The scan must be one of the model's: its rings, one finite azimuth per column.
+void check_scan_fits_model(const OrganizedScan& scan, const SensorModel& model) {
   model.validate();
   if (scan.rings() != model.rings() || scan.columns() <= 0) {
     throw InputError("visibility query: the scan has " + std::to_string(scan.rings()) + " x " +
                      std::to_string(scan.columns()) + " cells but sensor model '" + model.name +
                      "' has " + std::to_string(model.rings()) + " rings");
   }
-  if (scan.column_azimuth_rad.size() != static_cast<std::size_t>(columns)) {
-    throw InputError("visibility query: the scan has " + std::to_string(columns) + " columns but " +
-                     std::to_string(scan.column_azimuth_rad.size()) + " column azimuths");
+  if (scan.column_azimuth_rad.size() != static_cast<std::size_t>(scan.columns())) {
+    throw InputError("visibility query: the scan has " + std::to_string(scan.columns()) +
+                     " columns but " + std::to_string(scan.column_azimuth_rad.size()) +
+                     " column azimuths");
   }
   for (std::size_t c = 0; c < scan.column_azimuth_rad.size(); ++c) {
     if (!std::isfinite(scan.column_azimuth_rad[c])) {
@@ -137,7 +140,18 @@ BeamGeometry::BeamGeometry(const OrganizedScan& scan, const SensorModel& model)
                        " has a non-finite azimuth");
     }
   }
+}
 
+}  // namespace
+
+BeamGeometry::BeamGeometry(const OrganizedScan& scan, const SensorModel& model)
+    : rings(scan.rings()), columns(scan.columns()), column_azimuth_rad(scan.column_azimuth_rad) {
+  check_scan_fits_model(scan, model);
+  set_rings(model);
+  set_columns(scan, model);
+}
+
+void BeamGeometry::set_rings(const SensorModel& model) {
   // Rings: acceptance band of half the gap to each neighbour; a nominal (mean) gap at the ends.
   const auto nr = static_cast<std::size_t>(rings);
   elevation_rad = model.elevation_rad;
@@ -164,7 +178,9 @@ BeamGeometry::BeamGeometry(const OrganizedScan& scan, const SensorModel& model)
   max_abs_elevation_rad = std::max(std::abs(elevation_rad.front()), std::abs(elevation_rad.back()));
   offset_min_m = *std::min_element(offset_m.begin(), offset_m.end());
   offset_max_m = *std::max_element(offset_m.begin(), offset_m.end());
+}
 
+void BeamGeometry::set_columns(const OrganizedScan& scan, const SensorModel& model) {
   // Columns: sorted wrapped azimuths (any order or wrap of the capture), nominal step, buckets.
   const auto nc = static_cast<std::size_t>(columns);
   cos_az.resize(nc);

@@ -97,6 +97,10 @@ struct BeamGeometry {
   std::vector<int> sorted_column;
   std::vector<int> bucket;
   double nominal_step_rad{0.0};
+
+ private:
+  void set_rings(const SensorModel& model);  // the per-ring tables and bounds
+  void set_columns(const OrganizedScan& scan, const SensorModel& model);  // per-column tables
 };
 
 /// Keeps the BeamGeometry of the last scan and builds a new one only for a scan it does not fit.
