@@ -436,6 +436,21 @@ core::OrganizedScan PointCloud2Organizer::organize_ringless(const PointCloud2& c
   return std::move(organized.scan);
 }
 
+namespace {
+
+// A point's ring: its ring field, else its row (a cloud of one row per ring, the top ring first
+// when flip_rows); -1 when the field holds no ring of the model.
+int ring_of_point(const PointCloud2& cloud, const PointField* fring, bool flip_rows, int rings,
+                  std::uint32_t row, std::uint32_t col) {
+  if (fring == nullptr) {
+    return flip_rows ? rings - 1 - static_cast<int>(row) : static_cast<int>(row);
+  }
+  const double v = cloud.value(*fring, row, col);
+  return v >= 0 && v < rings ? static_cast<int>(v) : -1;
+}
+
+}  // namespace
+
 core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
                                                    const std::string& where) {
   const auto fail = [&where](const std::string& what) {
@@ -484,16 +499,10 @@ core::OrganizedScan PointCloud2Organizer::organize(const PointCloud2& cloud,
         ++stats_.empty_points;
         continue;
       }
-      int ring = 0;
-      if (fring != nullptr) {
-        const double v = cloud.value(*fring, row, col);
-        if (!(v >= 0 && v < rings)) {
-          ++stats_.bad_ring_points;
-          continue;
-        }
-        ring = static_cast<int>(v);
-      } else {
-        ring = flip_rows ? rings - 1 - static_cast<int>(row) : static_cast<int>(row);
+      const int ring = ring_of_point(cloud, fring, flip_rows, rings, row, col);
+      if (ring < 0) {
+        ++stats_.bad_ring_points;
+        continue;
       }
       // The measured distance: the driver's own, else from the beam origin (the point less the
       // ring's vertical offset), as the packet decoder reports it.

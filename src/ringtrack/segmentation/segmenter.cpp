@@ -262,7 +262,7 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     t->noise_radius = RadiusTable(KernelRadius{config_.min_width_m, step, false, t->pad});
     t->background_radius = RadiusTable(KernelRadius{config_.max_width_m, step, true, t->pad});
     t->direct_noise_above = t->noise_radius.radius_at_most_above(kDirectRadius);
-    t->value.resize(static_cast<std::size_t>(n + 2 * t->pad));
+    t->value.resize(static_cast<std::size_t>(n) + 2 * static_cast<std::size_t>(t->pad));
     t->key.resize(t->value.size());
     tables_ = std::move(t);
   }
@@ -280,8 +280,9 @@ void Segmenter::segment(const core::OrganizedScan& scan, std::vector<std::uint8_
     for (int col = 0; col < n; ++col) {
       const auto i = base + static_cast<std::size_t>(col);
       const float v = filter_range(ranges[i], status[i] == core::ReturnStatus::kValid, invalid);
-      t.value[static_cast<std::size_t>(col + pad)] = v;
-      t.key[static_cast<std::size_t>(col + pad)] = RangeBuckets::key(v);
+      const std::size_t padded = static_cast<std::size_t>(col) + static_cast<std::size_t>(pad);
+      t.value[padded] = v;
+      t.key[padded] = RangeBuckets::key(v);
     }
     std::copy_n(t.value.begin() + n, pad, t.value.begin());
     std::copy_n(t.key.begin() + n, pad, t.key.begin());

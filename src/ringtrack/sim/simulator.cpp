@@ -36,11 +36,12 @@ Simulator::Simulator(Scenario scenario, std::uint64_t seed, std::optional<core::
   sensor_dir_.resize(static_cast<std::size_t>(rings) * static_cast<std::size_t>(cols));
   for (int r = 0; r < rings; ++r) {
     const double el = model_.elevation_rad[static_cast<std::size_t>(r)];
+    const std::size_t row = static_cast<std::size_t>(r) * static_cast<std::size_t>(cols);
     for (int c = 0; c < cols; ++c) {
       // Same geometry as SensorModel::point(): the ray starts at (0, 0, vertical offset).
       const double az = c * step + model_.azimuth_offset_rad[static_cast<std::size_t>(r)];
-      sensor_dir_[static_cast<std::size_t>(r * cols + c)] = {
-          std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el)};
+      sensor_dir_[row + static_cast<std::size_t>(c)] = {std::cos(el) * std::cos(az),
+                                                        std::cos(el) * std::sin(az), std::sin(el)};
     }
   }
   bin_start_.assign(kBins + 1, 0);
@@ -210,7 +211,8 @@ void Simulator::cast_column(int c, std::int64_t t_mid, double t_max, SimulatedSc
   const Eigen::Matrix3d& rot = col_rot_[cu];
   const Eigen::Vector3d& pos = col_pos_[cu];
   for (int r = 0; r < model_.rings(); ++r) {
-    const Eigen::Vector3d d = rot * sensor_dir_[static_cast<std::size_t>(r * cols + c)];
+    const Eigen::Vector3d d =
+        rot * sensor_dir_[static_cast<std::size_t>(r) * static_cast<std::size_t>(cols) + cu];
     const Eigen::Vector3d o =
         pos + rot.col(2) * model_.vertical_offset_m[static_cast<std::size_t>(r)];
     double best = ground.intersect(o, d, 0.0, t_max);
