@@ -48,8 +48,9 @@ VelodyneReturnSelection parse_velodyne_return_selection(const std::string& name)
   if (name == "auto") return VelodyneReturnSelection::kAuto;
   if (name == "strongest") return VelodyneReturnSelection::kStrongest;
   if (name == "last") return VelodyneReturnSelection::kLast;
+  if (name == "second") return VelodyneReturnSelection::kSecond;
   throw core::ConfigError("velodyne return selection '" + name +
-                          "': expected auto, strongest or last");
+                          "': expected auto, strongest, last or second (Ouster _DUAL)");
 }
 
 VelodyneTimeSource parse_velodyne_time_source(const std::string& name) {
@@ -152,6 +153,10 @@ void VelodyneDecoder::check_stream(std::uint8_t product, std::uint8_t return_mod
       }
       use_last_ = true;
       break;
+    case VelodyneReturnSelection::kSecond:
+      throw core::InputError(where +
+                             ": Velodyne streams carry strongest and last returns; the second "
+                             "strongest return is Ouster's (_DUAL profile)");
   }
   product_ = product;
   return_mode_ = return_mode;
