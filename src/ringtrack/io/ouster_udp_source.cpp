@@ -51,7 +51,8 @@ class OusterUdpDecoder final : public UdpPacketDecoder {
 
 }  // namespace
 
-OusterUdpSource::OusterUdpSource(UdpOptions options, sensors::ouster::OusterMetadata metadata,
+OusterUdpSource::OusterUdpSource(const UdpOptions& options,
+                                 sensors::ouster::OusterMetadata metadata,
                                  sensors::ouster::OusterDecoderOptions decoder_options)
     : UdpPacketSource(options, std::make_unique<OusterUdpDecoder>(
                                    "udp://" + options.host + ":" + std::to_string(options.port),

@@ -20,7 +20,7 @@ class OusterUdpSource final : public UdpPacketSource {
  public:
   /// Binds the socket and starts receiving; throws core::InputError (address in use, metadata
   /// that cannot give the selected return), core::ConfigError on bad options.
-  OusterUdpSource(UdpOptions options, sensors::ouster::OusterMetadata metadata,
+  OusterUdpSource(const UdpOptions& options, sensors::ouster::OusterMetadata metadata,
                   sensors::ouster::OusterDecoderOptions decoder_options = {});
   /// Decoder counters (a snapshot).
   [[nodiscard]] sensors::ouster::OusterDecoderStats decoder_stats() const;

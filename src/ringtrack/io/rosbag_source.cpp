@@ -216,35 +216,38 @@ std::string RosbagScanSource::where(std::uint64_t index) const {
          std::to_string(index) + ")";
 }
 
+std::optional<core::OrganizedScan> RosbagScanSource::next_hesai() {
+  RosbagMessage message;
+  if (auto scan = hesai_->pop_scan()) return scan;
+  while (!finished_) {
+    if (!reader_->next(message)) {
+      finished_ = true;
+      if (hesai_->stats().decoded_packets == 0) {
+        throw core::InputError(reader_->path().string() + ": no decodable Hesai packets on " +
+                               topic_.name + " (" + std::to_string(stats_.messages) +
+                               " messages, " + std::to_string(stats_.packets) + " packets)");
+      }
+      hesai_->finish();
+      break;
+    }
+    ++stats_.messages;
+    const std::string at = where(message.index);
+    const auto packets = parse_pandar_scan(message.data, reader_->serialization(), at);
+    stats_.packets += packets.size();
+    try {
+      for (const auto& p : packets) hesai_->add_packet(p.data, p.stamp_ns);
+    } catch (const core::InputError& e) {
+      throw core::InputError(at + ": " + e.what());
+    }
+    if (auto scan = hesai_->pop_scan()) return scan;
+  }
+  return hesai_->pop_scan();
+}
+
 std::optional<core::OrganizedScan> RosbagScanSource::next() {
   if (ouster_) return next_ouster();
+  if (hesai_) return next_hesai();
   RosbagMessage message;
-  if (hesai_) {
-    if (auto scan = hesai_->pop_scan()) return scan;
-    while (!finished_) {
-      if (!reader_->next(message)) {
-        finished_ = true;
-        if (hesai_->stats().decoded_packets == 0) {
-          throw core::InputError(reader_->path().string() + ": no decodable Hesai packets on " +
-                                 topic_.name + " (" + std::to_string(stats_.messages) +
-                                 " messages, " + std::to_string(stats_.packets) + " packets)");
-        }
-        hesai_->finish();
-        break;
-      }
-      ++stats_.messages;
-      const std::string at = where(message.index);
-      const auto packets = parse_pandar_scan(message.data, reader_->serialization(), at);
-      stats_.packets += packets.size();
-      try {
-        for (const auto& p : packets) hesai_->add_packet(p.data, p.stamp_ns);
-      } catch (const core::InputError& e) {
-        throw core::InputError(at + ": " + e.what());
-      }
-      if (auto scan = hesai_->pop_scan()) return scan;
-    }
-    return hesai_->pop_scan();
-  }
   if (!packets_topic_) {
     while (!finished_) {
       if (!reader_->next(message)) {

@@ -136,6 +136,7 @@ class RosbagScanSource final : public ScanSource {
   [[nodiscard]] std::string where(std::uint64_t index) const;
   void open_ouster(const RosbagSourceOptions& options);
   std::optional<core::OrganizedScan> next_ouster();
+  std::optional<core::OrganizedScan> next_hesai();
 
   std::unique_ptr<RosbagReader> reader_;
   RosbagTopicInfo topic_;

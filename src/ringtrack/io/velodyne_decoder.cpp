@@ -356,9 +356,9 @@ void VelodyneDecoder::fill_column(int column, const VelodyneSequence& seq, std::
   const int lasers = layout_.lasers;
   for (int laser = 0; laser < lasers; ++laser) {
     const auto l = static_cast<std::size_t>(laser);
-    const std::uint8_t* rec = seq.records[0] + 3 * laser;
+    const std::uint8_t* rec = seq.records[0] + 3 * l;
     if (dual_) {
-      const std::uint8_t* other = seq.records[1] + 3 * laser;
+      const std::uint8_t* other = seq.records[1] + 3 * l;
       const bool first_empty = read_u16(rec) == 0;
       const bool other_empty = read_u16(other) == 0;
       // Pair = (last, strongest); when the last return is also the strongest, the second block
