@@ -262,6 +262,59 @@ TEST(OusterDualReturns, ASelectionTheProfileCannotGiveIsOneError) {
   }
 }
 
+// Newer metadata (firmware 3.x) gives the beam origin as beam_to_lidar_transform (nested in
+// beam_intrinsics); its translation replaces lidar_origin_to_beam_origin_mm: the range is measured
+// from the beam origin, n = |(x, z)| away, which sits x mm out along the encoder direction and z
+// mm up. The points of a decoded frame against that formula written out here.
+TEST(OusterMetadata, BeamToLidarTransformGivesTheBeamOrigin) {
+  test::OusterEncoderOptions eo;
+  std::string json = test::ouster_metadata_json(eo);
+  json.insert(json.rfind('}'),
+              ", \"beam_intrinsics\": {\"beam_to_lidar_transform\": [1, 0, 0, "
+              "27.116, 0, 1, 0, 0, 0, 0, 1, 5.5, 0, 0, 0, 1]}");
+  const OusterMetadata meta = parse_ouster_metadata(json, "new.json");
+  EXPECT_EQ(meta.beam_x_mm, 27.116);
+  EXPECT_EQ(meta.beam_z_mm, 5.5);
+  EXPECT_DOUBLE_EQ(meta.origin_to_beam_mm, std::sqrt(27.116 * 27.116 + 5.5 * 5.5));
+  OusterDecoder decoder(meta);
+  for (int m = 0; m < 1024; m += eo.columns_per_packet) {
+    decoder.add_packet(test::encode_ouster_packet(eo, m, m * 97'656LL, echo_of), 0);
+  }
+  decoder.finish();
+  const auto scan = decoder.pop_scan();
+  ASSERT_TRUE(scan.has_value());
+  const double n = std::sqrt(27.116 * 27.116 + 5.5 * 5.5);
+  std::size_t checked = 0;
+  for (int m = 0; m < 1024; m += 7) {
+    for (int b = 0; b < 16; ++b) {
+      const auto e = echo_of(m, b);
+      if (e.range_mm == 0) continue;
+      const std::size_t i = scan->index(15 - b, (m + 4 * (b % 4)) % 1024);
+      ASSERT_TRUE(scan->valid(i));
+      const double enc = 2 * kPi * (1.0 - m / 1024.0);
+      const double az = -2 * kPi * (b % 2 == 0 ? 1.5 : -1.5) / 360.0;
+      const double alt = 2 * kPi * (15.0 - 2.0 * b) / 360.0;
+      const double r = e.range_mm - n;
+      const double x = r * std::cos(enc + az) * std::cos(alt) + 27.116 * std::cos(enc);
+      const double y = r * std::sin(enc + az) * std::cos(alt) + 27.116 * std::sin(enc);
+      const double z = r * std::sin(alt) + 5.5;
+      const Eigen::Vector3d want(-x / 1000.0, -y / 1000.0, (z + 36.18) / 1000.0);
+      EXPECT_LT((scan->point(i).cast<double>() - want).norm(), 1e-5) << m << "," << b;
+      EXPECT_LT((decoder.point(b, m, e.range_mm) - want).norm(), 1e-9) << m << "," << b;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 2000u);
+  // Without the transform: lidar_origin_to_beam_origin_mm, in the plane, as before.
+  const OusterMetadata old = parse_ouster_metadata(test::ouster_metadata_json(eo), "old.json");
+  EXPECT_EQ(old.origin_to_beam_mm, 15.0);
+  EXPECT_EQ(old.beam_x_mm, 15.0);
+  EXPECT_EQ(old.beam_z_mm, 0.0);
+  json.replace(json.find("27.116"), 6, "\"x\"");
+  EXPECT_EQ(error_of([&] { parse_ouster_metadata(json, "new.json"); }),
+            "new.json: 'beam_to_lidar_transform' is not an array of numbers");
+}
+
 // ---- Real captures ----
 
 fs::path data_dir() {

@@ -152,9 +152,12 @@ Eigen::Vector3d OusterDecoder::point(int beam, int measurement_id, double range_
   // cos/sin(encoder + beam azimuth) by the angle-addition formulas.
   const double c = cos_enc_[m] * cos_beam_az_[b] - sin_enc_[m] * sin_beam_az_[b];
   const double s = sin_enc_[m] * cos_beam_az_[b] + cos_enc_[m] * sin_beam_az_[b];
-  const double x = r * c * cos_alt_[b] + n * cos_enc_[m];
-  const double y = r * s * cos_alt_[b] + n * sin_enc_[m];
-  const double z = r * sin_alt_[b];
+  const double bx = metadata_.beam_x_mm;
+  const double x = r * c * cos_alt_[b] + bx * cos_enc_[m];
+  const double y = r * s * cos_alt_[b] + bx * sin_enc_[m];
+  double z = r * sin_alt_[b];
+  // Only newer metadata lifts the beam origin; adding 0 could turn a -0 into +0.
+  if (metadata_.beam_z_mm != 0.0) z += metadata_.beam_z_mm;
   const auto& R = rotation_;
   return Eigen::Vector3d(R[0] * x + R[1] * y + R[2] * z + translation_mm_[0],
                          R[3] * x + R[4] * y + R[5] * z + translation_mm_[1],
