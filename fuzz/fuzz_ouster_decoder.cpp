@@ -1,5 +1,6 @@
 // libFuzzer target: Ouster metadata text through the JSON parser, and lidar packets through the
-// decoder of a fixed metadata (profile and beams chosen by the control byte). Documented errors
+// decoder of a fixed metadata (profile, beams, partial frames and the return selection chosen by
+// the control byte; a selection the profile cannot give is a documented error). Documented errors
 // (core::Error) are fine; crashes, sanitizer reports and hangs are bugs. Input: control byte, a
 // length byte and that much metadata text, then packets, each led by a byte choosing its size
 // (the metadata's, or a short odd one) and whether to make its columns valid with in-range
@@ -52,6 +53,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         metadata_text(profiles[control % 4], beam_choices[(control >> 2) % 4]), "f.json");
     OusterDecoderOptions options;
     options.keep_partial_scans = (control & 0x10) != 0;
+    options.return_selection = static_cast<OusterReturn>((control >> 5) % 3);
     OusterDecoder decoder(meta, options);
     const bool legacy = meta.profile == OusterProfile::kLegacy;
     const std::size_t column = (legacy ? 20 : 12) + meta.pixels_per_column * meta.pixel_bytes();

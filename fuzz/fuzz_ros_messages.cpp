@@ -1,7 +1,9 @@
 // libFuzzer target: serialized ROS messages (ROS 1 or CDR) through the message parsers:
 // velodyne_msgs/VelodyneScan (then its packets through the Velodyne decoder),
-// pandar_msgs/PandarScan, and sensor_msgs/PointCloud2 (then organized into a scan). Input byte 0
-// chooses the serialization (bit 0), the type (bits 1-2) and the organizer's model and cut
+// pandar_msgs/PandarScan, sensor_msgs/PointCloud2 (then organized into a scan), and ouster-ros's
+// PacketMsg (then its packet through the Ouster decoder of a fixed _DUAL metadata, the last
+// return selected). Input byte 0 chooses the serialization (bit 0), the type (bits 1-2: 0
+// VelodyneScan, 1 PandarScan, 2 PointCloud2, 3 PacketMsg) and the organizer's model and cut
 // azimuth (bits 3-7); the rest is the message.
 #include <cstdint>
 #include <string>
@@ -11,8 +13,27 @@
 #include "ringtrack/io/rosbag_source.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/sensors/hesai/hesai_format.hpp"
+#include "ringtrack/sensors/ouster/ouster_decoder.hpp"
+#include "ringtrack/sensors/ouster/ouster_metadata.hpp"
 
 using namespace ringtrack;
+
+namespace {
+
+// 8 beams, 16 columns of 16-byte pixels per packet: 32 + 16 x (12 + 8 x 16) + 32 = 2304 bytes.
+sensors::ouster::OusterMetadata ouster_metadata() {
+  return sensors::ouster::parse_ouster_metadata(
+      R"({"lidar_mode": "512x10", "beam_altitude_angles": [10, 7, 4, 1, -2, -5, -8, -11],
+          "beam_azimuth_angles": [1, -1, 1, -1, 1, -1, 1, -1],
+          "lidar_origin_to_beam_origin_mm": 15,
+          "lidar_to_sensor_transform": [-1, 0, 0, 0, 0, -1, 0, 0, 0, 0, 1, 36, 0, 0, 0, 1],
+          "data_format": {"columns_per_frame": 512, "columns_per_packet": 16,
+                          "pixels_per_column": 8, "pixel_shift_by_row": [0, 4, 8, 12, 0, 4, 8, 12],
+                          "udp_profile_lidar": "RNG19_RFL8_SIG16_NIR16_DUAL"}})",
+      "fuzz.json");
+}
+
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
@@ -39,6 +60,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         for (const auto& p : io::parse_pandar_scan(message, serialization, "fuzz message")) {
           (void)sensors::hesai::identify_hesai_packet(p.data);
         }
+      });
+      break;
+    case 3:
+      fuzz::expect_errors([&] {
+        const auto packet = io::parse_ouster_packet_msg(message, serialization, "fuzz message");
+        static const sensors::ouster::OusterMetadata metadata = ouster_metadata();
+        sensors::ouster::OusterDecoderOptions options;
+        options.return_selection = sensors::ouster::OusterReturn::kLast;
+        sensors::ouster::OusterDecoder decoder(metadata, options);
+        decoder.add_packet(packet, 0);
+        decoder.finish();
+        fuzz::drain_decoder(decoder);
       });
       break;
     default:

@@ -131,6 +131,19 @@ void sensor_pcap_seeds(const fs::path& out, const fs::path& scratch) {
     decoder_input.insert(decoder_input.end(), bytes.begin(), bytes.end());
   }
   put(out / "fuzz_ouster_decoder", "rng19_three_packets", decoder_input);
+  // The _DUAL profile (control: profile 2, 16 beams, the last return).
+  test::OusterEncoderOptions dual = options;
+  dual.profile = "RNG19_RFL8_SIG16_NIR16_DUAL";
+  Bytes dual_input{0x46, 0x00};
+  for (int packet = 0; packet < 3; ++packet) {
+    const auto bytes = test::encode_ouster_packet(dual, packet * 16, stamp, [](int m, int beam) {
+      const auto r = static_cast<std::uint32_t>(3000 + 10 * (m + beam));
+      return test::OusterEcho{r, (m + beam) % 2 == 0 ? r + 500 : r - 500, 50, 20};
+    });
+    dual_input.push_back(0x00);
+    dual_input.insert(dual_input.end(), bytes.begin(), bytes.end());
+  }
+  put(out / "fuzz_ouster_decoder", "dual_last_three_packets", dual_input);
   put(out / "fuzz_sensor_pcap", "ouster_rng19_raw",
       concat(
           {Bytes{0x03}, u16_le(metadata.size()), as_bytes(metadata), pcap_bytes(frames, scratch)}));
@@ -160,6 +173,17 @@ test::TestVelodyneScan velodyne_scan_message(int packets) {
   return scan;
 }
 
+// One lidar packet of fuzz_ros_messages's Ouster metadata (8 beams, _DUAL).
+std::vector<std::uint8_t> ouster_ros_packet() {
+  test::OusterEncoderOptions o;
+  o.profile = "RNG19_RFL8_SIG16_NIR16_DUAL";
+  o.pixels_per_column = 8;
+  return test::encode_ouster_packet(o, 0, 1'000'000'000, [](int m, int beam) {
+    const auto r = static_cast<std::uint32_t>(2000 + 10 * (m + beam));
+    return test::OusterEcho{r, r + 300, 40, 10};
+  });
+}
+
 void ros_message_seeds(const fs::path& out) {
   const fs::path dir = out / "fuzz_ros_messages";
   for (const auto [encoding, bit] :
@@ -171,6 +195,9 @@ void ros_message_seeds(const fs::path& out) {
     put(dir, "cloud_ring" + suffix,
         concat({Bytes{static_cast<std::uint8_t>(b | 4)},
                 test::serialize_pointcloud2(small_cloud(true), encoding)}));
+    put(dir, "ouster_packet" + suffix,
+        concat({Bytes{static_cast<std::uint8_t>(b | 6)},
+                test::serialize_ouster_packet(ouster_ros_packet(), encoding)}));
     put(dir, "cloud_organized" + suffix,
         concat({Bytes{static_cast<std::uint8_t>(b | 4 | 8)},
                 test::serialize_pointcloud2(small_cloud(false), encoding)}));

@@ -37,7 +37,8 @@ void InputOptions::add_to(CLI::App& command) {
   command.add_option("--metadata", metadata,
                      "Ouster: the sensor's metadata JSON (beam angles, data format)");
   command.add_option("--return", return_selection,
-                     "which return fills a cell: auto | strongest | last");
+                     "which return fills a cell: auto | strongest | last | second (Ouster _DUAL; "
+                     "docs/ouster.md)");
   command.add_option("--cut-azimuth", cut_azimuth_deg,
                      "azimuth where scans start, degrees clockwise from the sensor's +x "
                      "(Velodyne convention)");

@@ -1,12 +1,9 @@
 // `ringtrack convert udp://...`: packets replayed to the live tool are recorded; Ctrl-C (SIGINT)
 // ends the recording with a complete sequence folder holding the scans of the packets.
 
-#include <arpa/inet.h>
 #include <fcntl.h>
 #include <gtest/gtest.h>
-#include <netinet/in.h>
 #include <signal.h>
-#include <sys/socket.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,6 +17,7 @@
 #include "ringtrack/io/sequence.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "support/run_command.hpp"
+#include "support/udp_replay.hpp"
 #include "support/velodyne_encoder.hpp"
 
 namespace ringtrack {
@@ -30,34 +28,9 @@ using namespace std::chrono_literals;
 
 const std::string kCli = RINGTRACK_CLI_PATH;
 
-// A UDP port free right now on 127.0.0.1.
-std::uint16_t free_udp_port() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a);
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
-
-// True once some socket is bound to the UDP port (/proc/net/udp lists local ports in hex).
-bool udp_port_bound(std::uint16_t port) {
-  std::ifstream in("/proc/net/udp");
-  std::string line;
-  char hex[8];
-  std::snprintf(hex, sizeof hex, ":%04X ", port);
-  while (std::getline(in, line)) {
-    if (line.find(hex) != std::string::npos) return true;
-  }
-  return false;
-}
-
 TEST(ConvertUdpCli, CtrlCEndsTheRecordingWithACompleteSequence) {
   const std::string dir = testing::make_temp_dir("ringtrack-convert-udp-");
-  const std::uint16_t port = free_udp_port();
+  const std::uint16_t port = test::free_udp_port();
   const std::string err_path = dir + "/stderr.txt";
   const pid_t pid = ::fork();
   ASSERT_GE(pid, 0);
@@ -73,7 +46,7 @@ TEST(ConvertUdpCli, CtrlCEndsTheRecordingWithACompleteSequence) {
   bool bound = false;
   for (int i = 0; i < 500 && !bound; ++i) {
     std::this_thread::sleep_for(10ms);
-    bound = udp_port_bound(port);
+    bound = test::udp_port_bound(port);
   }
   ASSERT_TRUE(bound) << "the tool did not bind port " << port;
 
@@ -84,18 +57,10 @@ TEST(ConvertUdpCli, CtrlCEndsTheRecordingWithACompleteSequence) {
     return test::VelodyneEchoPair{{static_cast<std::uint16_t>(700 + (s * 13 + laser) % 8000), 3},
                                   {}};
   });
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(port);
-  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  for (std::size_t i = 0; i < packets.size(); ++i) {
-    ::sendto(fd, packets[i].payload.data(), packets[i].payload.size(), 0,
-             reinterpret_cast<const sockaddr*>(&to), sizeof to);
-    if (i % 20 == 19) std::this_thread::sleep_for(2ms);  // never fill the receive buffer
-  }
-  ::close(fd);
-  std::this_thread::sleep_for(300ms);  // let the receiver drain the socket
+  std::vector<std::vector<std::uint8_t>> payloads;
+  for (const auto& p : packets) payloads.push_back(p.payload);
+  ASSERT_NO_THROW(test::replay_to_loopback(payloads, port));  // never fills the receive buffer
+  std::this_thread::sleep_for(300ms);                         // let the receiver drain the socket
   ::kill(pid, SIGINT);
   int status = 0;
   if (!testing::wait_or_kill(pid, status)) {

@@ -58,7 +58,8 @@ std::vector<std::uint8_t> encode_ouster_packet(
         put(p, q + 8, 50, 2);
       } else if (pixel == 16) {
         put(p, q, (e.range_mm & 0x7FFFF) | (static_cast<std::uint32_t>(e.reflectivity) << 24), 4);
-        put(p, q + 4, (e.range2_mm & 0x7FFFF) | (7u << 24), 4);
+        put(p, q + 4, (e.range2_mm & 0x7FFFF) | (static_cast<std::uint32_t>(e.reflectivity2) << 24),
+            4);
         put(p, q + 8, 100, 2);
         put(p, q + 10, 90, 2);
         put(p, q + 12, 50, 2);

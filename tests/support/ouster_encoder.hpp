@@ -14,6 +14,7 @@ struct OusterEcho {
   std::uint32_t range_mm{0};  ///< as the profile can hold it (RNG15: a multiple of 8)
   std::uint32_t range2_mm{0};
   std::uint8_t reflectivity{0};
+  std::uint8_t reflectivity2{7};  ///< the second return's (_DUAL)
 };
 
 /// Packet layout choices.

@@ -205,6 +205,14 @@ std::vector<std::uint8_t> serialize_pointcloud2(const TestPointCloud2& c, RosEnc
   return s.take();
 }
 
+std::vector<std::uint8_t> serialize_ouster_packet(const std::vector<std::uint8_t>& buf,
+                                                  RosEncoding encoding) {
+  Serializer s(encoding);
+  s.u32(static_cast<std::uint32_t>(buf.size()));
+  s.raw(buf);
+  return s.take();
+}
+
 std::vector<std::uint8_t> serialize_string(const std::string& text, RosEncoding encoding) {
   Serializer s(encoding);
   s.string(text);

@@ -71,6 +71,9 @@ std::vector<std::uint8_t> serialize_velodyne_scan(const TestVelodyneScan& scan,
                                                   RosEncoding encoding);
 /// Serializes a PointCloud2 (CDR: little endian, with the encapsulation header).
 std::vector<std::uint8_t> serialize_pointcloud2(const TestPointCloud2& cloud, RosEncoding encoding);
+/// Serializes an ouster_sensor_msgs/PacketMsg (ROS 1: ouster_ros/PacketMsg): `uint8[] buf`.
+std::vector<std::uint8_t> serialize_ouster_packet(const std::vector<std::uint8_t>& buf,
+                                                  RosEncoding encoding);
 /// Serializes a std_msgs/String.
 std::vector<std::uint8_t> serialize_string(const std::string& text, RosEncoding encoding);
 

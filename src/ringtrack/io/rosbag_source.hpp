@@ -1,7 +1,8 @@
 #pragma once
 /// Organized scans from ROS bags (ROS 1 .bag or rosbag2): velodyne_msgs/VelodyneScan topics
-/// through the Velodyne decoder, pandar_msgs/PandarScan through the Hesai decoder,
-/// sensor_msgs/PointCloud2 topics through PointCloud2Organizer.
+/// through the Velodyne decoder, pandar_msgs/PandarScan through the Hesai decoder, Ouster
+/// PacketMsg topics through the Ouster decoder, sensor_msgs/PointCloud2 topics through
+/// PointCloud2Organizer.
 
 #include <cstdint>
 #include <filesystem>
@@ -17,6 +18,7 @@
 #include "ringtrack/io/source.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/sensors/hesai/hesai_decoder.hpp"
+#include "ringtrack/sensors/ouster/ouster_decoder.hpp"
 
 namespace ringtrack::io {
 
@@ -24,6 +26,11 @@ namespace ringtrack::io {
 inline constexpr const char* kVelodyneScanRosType = "velodyne_msgs/VelodyneScan";
 /// pandar_msgs/PandarScan (type name without "/msg/"): Hesai packets.
 inline constexpr const char* kPandarScanRosType = "pandar_msgs/PandarScan";
+/// ouster_sensor_msgs/PacketMsg (type name without "/msg/"): one raw Ouster packet (ouster-ros,
+/// ROS 2); lidar packets on /ouster/lidar_packets, IMU packets of the same type on another topic.
+inline constexpr const char* kOusterPacketRosType = "ouster_sensor_msgs/PacketMsg";
+/// ouster_ros/PacketMsg: the same message as ouster-ros's ROS 1 driver names it.
+inline constexpr const char* kOusterRos1PacketRosType = "ouster_ros/PacketMsg";
 /// sensor_msgs/PointCloud2 (type name without "/msg/").
 inline constexpr const char* kPointCloud2RosType = "sensor_msgs/PointCloud2";
 
@@ -53,6 +60,12 @@ std::vector<PandarScanPacket> parse_pandar_scan(std::span<const std::uint8_t> me
                                                 RosSerialization serialization,
                                                 const std::string& where);
 
+/// Parses a serialized Ouster PacketMsg (`uint8[] buf`) into its buffer (pointing into the
+/// message); throws core::InputError naming `where`, the byte offset and what was expected.
+std::span<const std::uint8_t> parse_ouster_packet_msg(std::span<const std::uint8_t> message,
+                                                      RosSerialization serialization,
+                                                      const std::string& where);
+
 /// What to read from a bag and how.
 struct RosbagSourceOptions {
   std::string topic;  ///< "" = the first topic of a supported type (in the bag's order)
@@ -61,6 +74,9 @@ struct RosbagSourceOptions {
   /// For PandarScan topics (its calibration, or calibration_path, is required there).
   sensors::hesai::HesaiDecoderOptions hesai;
   std::string calibration_path;  ///< read into hesai.calibration when that is empty
+  /// For Ouster PacketMsg topics: the sensor's metadata JSON (required there).
+  std::string metadata_path;
+  sensors::ouster::OusterDecoderOptions ouster;  ///< for Ouster PacketMsg topics
 };
 
 /// Counters of a bag source.
@@ -103,6 +119,10 @@ class RosbagScanSource final : public ScanSource {
   [[nodiscard]] const sensors::hesai::HesaiDecoder* hesai_decoder() const {
     return hesai_ ? &*hesai_ : nullptr;
   }
+  /// The Ouster decoder of a PacketMsg topic (nullptr otherwise).
+  [[nodiscard]] const sensors::ouster::OusterDecoder* ouster_decoder() const {
+    return ouster_ ? &*ouster_ : nullptr;
+  }
   /// The bag reader.
   [[nodiscard]] const RosbagReader& reader() const { return *reader_; }
   /// The packet decoder (VelodyneScan topics).
@@ -114,6 +134,9 @@ class RosbagScanSource final : public ScanSource {
 
  private:
   [[nodiscard]] std::string where(std::uint64_t index) const;
+  void open_ouster(const RosbagSourceOptions& options);
+  std::optional<core::OrganizedScan> next_ouster();
+  std::optional<core::OrganizedScan> next_hesai();
 
   std::unique_ptr<RosbagReader> reader_;
   RosbagTopicInfo topic_;
@@ -121,6 +144,7 @@ class RosbagScanSource final : public ScanSource {
   VelodyneDecoder decoder_;
   PointCloud2Organizer organizer_;
   std::optional<sensors::hesai::HesaiDecoder> hesai_;
+  std::optional<sensors::ouster::OusterDecoder> ouster_;
   RosbagSourceStats stats_;
   bool finished_{false};
 };

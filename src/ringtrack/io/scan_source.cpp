@@ -7,6 +7,7 @@
 #include "ringtrack/io/hesai_pcap_source.hpp"
 #include "ringtrack/io/mcap_bag_reader.hpp"
 #include "ringtrack/io/ouster_pcap_source.hpp"
+#include "ringtrack/io/ouster_udp_source.hpp"
 #include "ringtrack/io/rosbag1_reader.hpp"
 #include "ringtrack/io/rosbag2_reader.hpp"
 #include "ringtrack/io/rosbag_reader.hpp"
@@ -74,6 +75,10 @@ sensors::hesai::HesaiDecoderOptions hesai_options(const ScanSourceOptions& optio
     case VelodyneReturnSelection::kLast:
       h.return_selection = sensors::hesai::HesaiReturnSelection::kLast;
       break;
+    case VelodyneReturnSelection::kSecond:
+      throw core::ConfigError(
+          "return 'second': Hesai streams carry strongest, last and first returns; the second "
+          "strongest return is Ouster's (_DUAL profile)");
   }
   h.cut_azimuth_deg = v.cut_azimuth_deg;
   h.scan_rate_hz = v.scan_rate_hz;
@@ -81,12 +86,32 @@ sensors::hesai::HesaiDecoderOptions hesai_options(const ScanSourceOptions& optio
   return h;
 }
 
+// Ouster decoder options from the shared ones: auto and strongest are return 1.
+sensors::ouster::OusterDecoderOptions ouster_options(const ScanSourceOptions& options) {
+  const VelodyneDecoderOptions& v = options.velodyne.decoder;
+  sensors::ouster::OusterDecoderOptions o;
+  o.keep_partial_scans = v.keep_partial_scans;
+  switch (v.return_selection) {
+    case VelodyneReturnSelection::kAuto:
+    case VelodyneReturnSelection::kStrongest:
+      o.return_selection = sensors::ouster::OusterReturn::kStrongest;
+      break;
+    case VelodyneReturnSelection::kLast:
+      o.return_selection = sensors::ouster::OusterReturn::kLast;
+      break;
+    case VelodyneReturnSelection::kSecond:
+      o.return_selection = sensors::ouster::OusterReturn::kSecond;
+      break;
+  }
+  return o;
+}
+
 // A capture: Ouster when its metadata is given, Hesai when named or recognised (its angle
 // corrections are required), Velodyne otherwise.
 std::unique_ptr<ScanSource> open_pcap(const std::string& input, const ScanSourceOptions& options) {
   if (!options.metadata.empty()) {
     return std::make_unique<OusterPcapSource>(
-        input, sensors::ouster::read_ouster_metadata(options.metadata));
+        input, sensors::ouster::read_ouster_metadata(options.metadata), ouster_options(options));
   }
   if (pcap_holds_ouster(input)) {
     throw core::InputError(input +
@@ -116,8 +141,14 @@ std::unique_ptr<ScanSource> open_bag(const std::string& input, ScanInputFormat f
   b.topic = options.topic;
   b.decoder = options.velodyne.decoder;
   if (is_hesai_model_name(b.decoder.model)) b.decoder.model.clear();
-  b.hesai = hesai_options(options);
+  // The second return comes with Ouster metadata (validate()), which excludes a Hesai
+  // calibration, so such a bag never reaches the Hesai decoder.
+  if (b.decoder.return_selection != VelodyneReturnSelection::kSecond) {
+    b.hesai = hesai_options(options);
+  }
   b.calibration_path = options.calibration;
+  b.metadata_path = options.metadata;
+  b.ouster = ouster_options(options);
   b.cloud.model = is_hesai_model_name(options.velodyne.decoder.model)
                       ? std::string()
                       : options.velodyne.decoder.model;
@@ -163,6 +194,11 @@ void ScanSourceOptions::validate() const {
   if (ring_field.empty()) {
     throw core::ConfigError("ring field '': expected the name of a PointCloud2 field (ring)");
   }
+  if (velodyne.decoder.return_selection == VelodyneReturnSelection::kSecond && metadata.empty()) {
+    throw core::ConfigError(
+        "return 'second': only Ouster's RNG19_RFL8_SIG16_NIR16_DUAL profile reports a second "
+        "strongest return (give the sensor's metadata JSON)");
+  }
   if (!calibration.empty() && !metadata.empty()) {
     throw core::ConfigError(
         "calibration (Hesai) and metadata (Ouster) given together: expected the one file of "
@@ -183,6 +219,10 @@ std::unique_ptr<ScanSource> open_source(const std::string& uri, const ScanSource
     case ScanInputFormat::kPcap:
       return open_pcap(uri, options);
     case ScanInputFormat::kUdp:
+      if (!options.metadata.empty()) {
+        return open_ouster_udp_source(uri, sensors::ouster::read_ouster_metadata(options.metadata),
+                                      ouster_options(options), options.velodyne);
+      }
       return open_velodyne_udp_source(uri, options.velodyne);
     case ScanInputFormat::kRosbag1:
     case ScanInputFormat::kRosbag2:

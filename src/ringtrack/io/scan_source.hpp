@@ -1,10 +1,10 @@
 #pragma once
 /// Opens any scan input by name through one call, io::open_source: Velodyne, Hesai or Ouster
-/// pcap/pcapng files, live Velodyne UDP (udp://HOST:PORT), ROS 1 bags and ROS 2 bags in sqlite3
-/// or MCAP (VelodyneScan, PandarScan or PointCloud2 topics), and folders of scan files (sequence
-/// folders with their poses, PCD or KITTI-style .bin files). Every input is an io::ScanSource
-/// (source.hpp). The kind of input is guessed from the name and contents; the sensor is
-/// recognised from the packets (Velodyne factory bytes, Hesai header) or named
+/// pcap/pcapng files, live Velodyne or Ouster UDP (udp://HOST:PORT), ROS 1 bags and ROS 2 bags in
+/// sqlite3 or MCAP (VelodyneScan, PandarScan, Ouster PacketMsg or PointCloud2 topics), and folders
+/// of scan files (sequence folders with their poses, PCD or KITTI-style .bin files). Every input is
+/// an io::ScanSource (source.hpp). The kind of input is guessed from the name and contents; the
+/// sensor is recognised from the packets (Velodyne factory bytes, Hesai header) or named
 /// (`velodyne.decoder.model`). See docs/inputs.md, docs/hesai.md and docs/cpp.md.
 
 #include <filesystem>
@@ -21,7 +21,7 @@ namespace ringtrack::io {
 enum class ScanInputFormat {
   kAuto,     ///< from the name and contents (guess_scan_input_format)
   kPcap,     ///< .pcap / .pcapng capture of Velodyne, Hesai or Ouster packets
-  kUdp,      ///< live Velodyne packets: udp://HOST:PORT
+  kUdp,      ///< live Velodyne or (with metadata) Ouster packets: udp://HOST:PORT
   kRosbag1,  ///< ROS 1 .bag file
   kRosbag2,  ///< rosbag2 folder (sqlite3 or mcap storage), .db3 file or MCAP file
   kFolder,   ///< sequence folder, folder of PCD files or of KITTI-style .bin files (sequence.hpp)

@@ -1,6 +1,6 @@
 #pragma once
 /// The one interface every scan input implements (pcap captures of Velodyne, Hesai and Ouster
-/// sensors, live Velodyne UDP, ROS 1 and ROS 2 bags, sequence folders, folders of PCD or
+/// sensors, live Velodyne and Ouster UDP, ROS 1 and ROS 2 bags, sequence folders, folders of PCD or
 /// KITTI-style .bin files). Open one with io::open_source (scan_source.hpp), which guesses the
 /// kind of input from its name and contents; front ends then read scans without knowing which
 /// kind it is.

@@ -48,8 +48,9 @@ VelodyneReturnSelection parse_velodyne_return_selection(const std::string& name)
   if (name == "auto") return VelodyneReturnSelection::kAuto;
   if (name == "strongest") return VelodyneReturnSelection::kStrongest;
   if (name == "last") return VelodyneReturnSelection::kLast;
+  if (name == "second") return VelodyneReturnSelection::kSecond;
   throw core::ConfigError("velodyne return selection '" + name +
-                          "': expected auto, strongest or last");
+                          "': expected auto, strongest, last or second (Ouster _DUAL)");
 }
 
 VelodyneTimeSource parse_velodyne_time_source(const std::string& name) {
@@ -152,6 +153,10 @@ void VelodyneDecoder::check_stream(std::uint8_t product, std::uint8_t return_mod
       }
       use_last_ = true;
       break;
+    case VelodyneReturnSelection::kSecond:
+      throw core::InputError(where +
+                             ": Velodyne streams carry strongest and last returns; the second "
+                             "strongest return is Ouster's (_DUAL profile)");
   }
   product_ = product;
   return_mode_ = return_mode;
@@ -351,9 +356,9 @@ void VelodyneDecoder::fill_column(int column, const VelodyneSequence& seq, std::
   const int lasers = layout_.lasers;
   for (int laser = 0; laser < lasers; ++laser) {
     const auto l = static_cast<std::size_t>(laser);
-    const std::uint8_t* rec = seq.records[0] + 3 * laser;
+    const std::uint8_t* rec = seq.records[0] + 3 * l;
     if (dual_) {
-      const std::uint8_t* other = seq.records[1] + 3 * laser;
+      const std::uint8_t* other = seq.records[1] + 3 * l;
       const bool first_empty = read_u16(rec) == 0;
       const bool other_empty = read_u16(other) == 0;
       // Pair = (last, strongest); when the last return is also the strongest, the second block

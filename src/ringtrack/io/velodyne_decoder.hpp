@@ -19,6 +19,7 @@ enum class VelodyneReturnSelection : std::uint8_t {
   kAuto,       ///< single-return streams: their return; dual streams: the strongest
   kStrongest,  ///< the strongest return (from a strongest or a dual stream)
   kLast,       ///< the last return (from a last or a dual stream)
+  kSecond,     ///< the second strongest return: Ouster's _DUAL profile only (docs/ouster.md)
 };
 
 /// Where scan and column time stamps come from.

@@ -1,7 +1,5 @@
 #include "ringtrack/io/velodyne_source.hpp"
 
-#include <chrono>
-
 #include "ringtrack/core/error.hpp"
 
 namespace ringtrack::io {
@@ -23,41 +21,6 @@ class PcapInput final : public ScanSource {
   std::string input_;
 };
 
-class UdpInput final : public ScanSource {
- public:
-  UdpInput(const std::string& input, const VelodyneSourceOptions& o)
-      : source_(udp_options(input, o), o.decoder), interrupt_(o.interrupt), input_(input) {}
-  std::optional<core::OrganizedScan> next() override {
-    using namespace std::chrono_literals;
-    while (true) {
-      if (interrupt_ != nullptr && interrupt_->load() && !source_.stopped()) source_.stop();
-      if (auto scan = source_.next(100ms)) {
-        if (!model_) model_ = source_.model();
-        return scan;
-      }
-      if (source_.stopped()) return source_.next(0ms);
-    }
-  }
-  [[nodiscard]] const core::SensorModel& model() const override {
-    if (!model_) throw core::Error("udp input: the model is not known before the first scan");
-    return *model_;
-  }
-  [[nodiscard]] std::string description() const override { return input_ + " (live Velodyne UDP)"; }
-  [[nodiscard]] std::string summary() const override { return source_.summary(); }
-  [[nodiscard]] bool live() const override { return true; }
-
- private:
-  static VelodyneUdpOptions udp_options(const std::string& input, const VelodyneSourceOptions& o) {
-    VelodyneUdpOptions u = parse_udp_url(input);
-    u.max_queued_scans = o.udp_max_queued_scans;
-    return u;
-  }
-  VelodyneUdpSource source_;
-  const std::atomic<bool>* interrupt_;
-  std::string input_;
-  std::optional<core::SensorModel> model_;  // copied from the receiver's decoder once known
-};
-
 }  // namespace
 
 std::unique_ptr<ScanSource> open_velodyne_pcap_source(const std::string& path,
@@ -67,7 +30,11 @@ std::unique_ptr<ScanSource> open_velodyne_pcap_source(const std::string& path,
 
 std::unique_ptr<ScanSource> open_velodyne_udp_source(const std::string& url,
                                                      const VelodyneSourceOptions& options) {
-  return std::make_unique<UdpInput>(url, options);
+  VelodyneUdpOptions udp = parse_udp_url(url);
+  udp.max_queued_scans = options.udp_max_queued_scans;
+  return std::make_unique<UdpScanSource>(
+      std::make_unique<VelodyneUdpSource>(std::move(udp), options.decoder),
+      url + " (live Velodyne UDP)", options.interrupt);
 }
 
 }  // namespace ringtrack::io

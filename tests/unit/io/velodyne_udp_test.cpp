@@ -16,6 +16,7 @@
 #include "ringtrack/io/pcap_reader.hpp"
 #include "ringtrack/io/velodyne_decoder.hpp"
 #include "ringtrack/io/velodyne_udp_source.hpp"
+#include "support/udp_replay.hpp"
 #include "support/velodyne_encoder.hpp"
 
 namespace ringtrack::io {
@@ -35,21 +36,11 @@ std::vector<test::EncodedVelodynePacket> packets(double revolutions) {
   });
 }
 
-// Sends the packets to 127.0.0.1:port, pausing now and then so the receive buffer never fills.
+// Sends the packets to 127.0.0.1:port (tests/support/udp_replay).
 void replay(const std::vector<test::EncodedVelodynePacket>& ps, std::uint16_t port) {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  ASSERT_GE(fd, 0);
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(port);
-  to.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  for (std::size_t i = 0; i < ps.size(); ++i) {
-    const auto sent = ::sendto(fd, ps[i].payload.data(), ps[i].payload.size(), 0,
-                               reinterpret_cast<const sockaddr*>(&to), sizeof to);
-    ASSERT_EQ(sent, static_cast<ssize_t>(ps[i].payload.size()));
-    if (i % 20 == 19) std::this_thread::sleep_for(2ms);
-  }
-  ::close(fd);
+  std::vector<std::vector<std::uint8_t>> payloads;
+  for (const auto& p : ps) payloads.push_back(p.payload);
+  ASSERT_NO_THROW(test::replay_to_loopback(payloads, port));
 }
 
 std::vector<core::OrganizedScan> decode_direct(const std::vector<test::EncodedVelodynePacket>& ps) {

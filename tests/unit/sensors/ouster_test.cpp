@@ -14,7 +14,9 @@
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "ringtrack/core/error.hpp"
@@ -152,6 +154,165 @@ TEST(OusterDecoder, PacketsOfAnotherFormatThanTheMetadataAreAnError) {
   d2.finish();
   EXPECT_FALSE(d2.pop_scan().has_value());  // incomplete frame dropped
   EXPECT_EQ(d2.stats().partial_scans_dropped, 1u);
+}
+
+// The _DUAL profile's returns (Ouster's manual: return 1 the strongest, return 2 the second
+// strongest). A hand-made frame holds every case: both returns with the second nearer or
+// farther, equal ranges, no second return, no return at all, and a second return without a
+// first. Each selection must put exactly the expected range and reflectivity in every cell.
+test::OusterEcho dual_echo(int m, int beam) {
+  const auto r1 = static_cast<std::uint32_t>(2000 + 8 * ((m * 7 + beam * 13) % 3000));
+  const auto r2 = static_cast<std::uint32_t>(1000 + 8 * ((m * 11 + beam * 5) % 5000));
+  const auto f1 = static_cast<std::uint8_t>(100 + (m + beam) % 100);
+  const auto f2 = static_cast<std::uint8_t>((m * 3 + beam) % 100);
+  switch ((m + 3 * beam) % 6) {
+    case 0:
+      return {r1, 0, f1, 0};  // one return only
+    case 1:
+      return {};  // nothing
+    case 2:
+      return {r1, r1, f1, f2};  // the same range twice
+    case 3:
+      return {0, r2, 0, f2};  // a second return without a first (not expected, but possible)
+    default:
+      return {r1, r2, f1, f2};  // the second nearer or farther
+  }
+}
+
+// The (range mm, reflectivity) a selection must give for a pixel; range 0 = no return.
+std::pair<std::uint32_t, std::uint8_t> expected_return(OusterReturn selection,
+                                                       const test::OusterEcho& e) {
+  const bool second = selection == OusterReturn::kSecond ||
+                      (selection == OusterReturn::kLast && e.range2_mm > e.range_mm);
+  return second ? std::pair{e.range2_mm, e.reflectivity2} : std::pair{e.range_mm, e.reflectivity};
+}
+
+std::optional<core::OrganizedScan> decode_dual_frame(OusterDecoderOptions options) {
+  test::OusterEncoderOptions eo;
+  eo.profile = "RNG19_RFL8_SIG16_NIR16_DUAL";
+  OusterDecoder decoder(parse_ouster_metadata(test::ouster_metadata_json(eo), "dual.json"),
+                        options);
+  for (int m = 0; m < 1024; m += eo.columns_per_packet) {
+    decoder.add_packet(test::encode_ouster_packet(eo, m, m * 97'656LL, dual_echo), 0);
+  }
+  decoder.finish();
+  return decoder.pop_scan();
+}
+
+TEST(OusterDualReturns, EachSelectionPicksTheExpectedReturnPerPixel) {
+  const auto by_default = decode_dual_frame({});
+  ASSERT_TRUE(by_default.has_value());
+  for (const OusterReturn selection :
+       {OusterReturn::kStrongest, OusterReturn::kSecond, OusterReturn::kLast}) {
+    OusterDecoderOptions o;
+    o.return_selection = selection;
+    const auto scan = decode_dual_frame(o);
+    ASSERT_TRUE(scan.has_value());
+    std::map<std::string, int> cases;
+    for (int m = 0; m < 1024; ++m) {
+      for (int b = 0; b < 16; ++b) {
+        const std::size_t i = scan->index(15 - b, (m + 4 * (b % 4)) % 1024);
+        const test::OusterEcho e = dual_echo(m, b);
+        const auto [range_mm, reflectivity] = expected_return(selection, e);
+        const std::string where =
+            to_string(selection) + " m " + std::to_string(m) + " beam " + std::to_string(b);
+        if (range_mm == 0) {
+          ASSERT_EQ(scan->status(i), core::ReturnStatus::kNoReturn) << where;
+          ++cases["empty"];
+          continue;
+        }
+        ASSERT_TRUE(scan->valid(i)) << where;
+        ASSERT_EQ(scan->range_m(i), static_cast<float>(range_mm) * 1e-3f) << where;
+        ASSERT_EQ(scan->intensity(i), static_cast<float>(reflectivity)) << where;
+        ++cases[range_mm == e.range_mm ? "return 1" : "return 2"];
+      }
+    }
+    // Every selection meets both kinds of cell; strongest never takes return 2.
+    EXPECT_GT(cases["empty"], 1000) << to_string(selection);
+    EXPECT_GT(cases["return 1"], selection == OusterReturn::kSecond ? 0 : 5000);
+    EXPECT_EQ(cases["return 2"] > 0, selection != OusterReturn::kStrongest);
+  }
+  // The default is the strongest return, bit for bit as before the selection existed.
+  OusterDecoderOptions strongest;
+  strongest.return_selection = OusterReturn::kStrongest;
+  const auto explicit_strongest = decode_dual_frame(strongest);
+  EXPECT_EQ(by_default->statuses(), explicit_strongest->statuses());
+  for (std::size_t i = 0; i < by_default->size(); ++i) {
+    if (by_default->valid(i)) {
+      ASSERT_EQ(by_default->point(i), explicit_strongest->point(i));
+    }
+  }
+}
+
+TEST(OusterDualReturns, ASelectionTheProfileCannotGiveIsOneError) {
+  for (const char* profile : {"LEGACY", "RNG19_RFL8_SIG16_NIR16", "RNG15_RFL8_NIR8"}) {
+    test::OusterEncoderOptions eo;
+    eo.profile = profile;
+    const OusterMetadata meta = parse_ouster_metadata(test::ouster_metadata_json(eo), "os.json");
+    for (const OusterReturn selection : {OusterReturn::kSecond, OusterReturn::kLast}) {
+      OusterDecoderOptions o;
+      o.return_selection = selection;
+      EXPECT_EQ(error_of([&] { OusterDecoder decoder(meta, o); }),
+                "os.json: the " + to_string(selection) +
+                    " return needs the RNG19_RFL8_SIG16_NIR16_DUAL profile, but the sensor "
+                    "sends " +
+                    profile + " (one return per pixel: the strongest)");
+    }
+    EXPECT_NO_THROW(OusterDecoder(meta, {}));
+  }
+}
+
+// Newer metadata (firmware 3.x) gives the beam origin as beam_to_lidar_transform (nested in
+// beam_intrinsics); its translation replaces lidar_origin_to_beam_origin_mm: the range is measured
+// from the beam origin, n = |(x, z)| away, which sits x mm out along the encoder direction and z
+// mm up. The points of a decoded frame against that formula written out here.
+TEST(OusterMetadata, BeamToLidarTransformGivesTheBeamOrigin) {
+  test::OusterEncoderOptions eo;
+  std::string json = test::ouster_metadata_json(eo);
+  json.insert(json.rfind('}'),
+              ", \"beam_intrinsics\": {\"beam_to_lidar_transform\": [1, 0, 0, "
+              "27.116, 0, 1, 0, 0, 0, 0, 1, 5.5, 0, 0, 0, 1]}");
+  const OusterMetadata meta = parse_ouster_metadata(json, "new.json");
+  EXPECT_EQ(meta.beam_x_mm, 27.116);
+  EXPECT_EQ(meta.beam_z_mm, 5.5);
+  EXPECT_DOUBLE_EQ(meta.origin_to_beam_mm, std::sqrt(27.116 * 27.116 + 5.5 * 5.5));
+  OusterDecoder decoder(meta);
+  for (int m = 0; m < 1024; m += eo.columns_per_packet) {
+    decoder.add_packet(test::encode_ouster_packet(eo, m, m * 97'656LL, echo_of), 0);
+  }
+  decoder.finish();
+  const auto scan = decoder.pop_scan();
+  ASSERT_TRUE(scan.has_value());
+  const double n = std::sqrt(27.116 * 27.116 + 5.5 * 5.5);
+  std::size_t checked = 0;
+  for (int m = 0; m < 1024; m += 7) {
+    for (int b = 0; b < 16; ++b) {
+      const auto e = echo_of(m, b);
+      if (e.range_mm == 0) continue;
+      const std::size_t i = scan->index(15 - b, (m + 4 * (b % 4)) % 1024);
+      ASSERT_TRUE(scan->valid(i));
+      const double enc = 2 * kPi * (1.0 - m / 1024.0);
+      const double az = -2 * kPi * (b % 2 == 0 ? 1.5 : -1.5) / 360.0;
+      const double alt = 2 * kPi * (15.0 - 2.0 * b) / 360.0;
+      const double r = e.range_mm - n;
+      const double x = r * std::cos(enc + az) * std::cos(alt) + 27.116 * std::cos(enc);
+      const double y = r * std::sin(enc + az) * std::cos(alt) + 27.116 * std::sin(enc);
+      const double z = r * std::sin(alt) + 5.5;
+      const Eigen::Vector3d want(-x / 1000.0, -y / 1000.0, (z + 36.18) / 1000.0);
+      EXPECT_LT((scan->point(i).cast<double>() - want).norm(), 1e-5) << m << "," << b;
+      EXPECT_LT((decoder.point(b, m, e.range_mm) - want).norm(), 1e-9) << m << "," << b;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 2000u);
+  // Without the transform: lidar_origin_to_beam_origin_mm, in the plane, as before.
+  const OusterMetadata old = parse_ouster_metadata(test::ouster_metadata_json(eo), "old.json");
+  EXPECT_EQ(old.origin_to_beam_mm, 15.0);
+  EXPECT_EQ(old.beam_x_mm, 15.0);
+  EXPECT_EQ(old.beam_z_mm, 0.0);
+  json.replace(json.find("27.116"), 6, "\"x\"");
+  EXPECT_EQ(error_of([&] { parse_ouster_metadata(json, "new.json"); }),
+            "new.json: 'beam_to_lidar_transform' is not an array of numbers");
 }
 
 // ---- Real captures ----

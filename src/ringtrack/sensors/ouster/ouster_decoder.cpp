@@ -51,6 +51,7 @@ inline void read_pixel(const std::uint8_t* q, OusterProfile profile, OusterPixel
       px.range_mm = le32(q) & 0x7FFFFu;
       px.reflectivity = q[3];
       px.range2_mm = le32(q + 4) & 0x7FFFFu;
+      px.reflectivity2 = q[7];
       break;
     case OusterProfile::kRng15Rfl8Nir8:  // range 15 bits in 8 mm units, reflectivity u8, NIR u8
       px.range_mm = (le16(q) & 0x7FFFu) * 8u;
@@ -59,7 +60,29 @@ inline void read_pixel(const std::uint8_t* q, OusterProfile profile, OusterPixel
   }
 }
 
+// Moves the selected return of a _DUAL pixel into range_mm / reflectivity.
+inline void select_return(OusterReturn selection, OusterPixel& px) {
+  const bool second = selection == OusterReturn::kSecond ||
+                      (selection == OusterReturn::kLast && px.range2_mm > px.range_mm);
+  if (second) {
+    px.range_mm = px.range2_mm;
+    px.reflectivity = px.reflectivity2;
+  }
+}
+
 }  // namespace
+
+std::string to_string(OusterReturn selection) {
+  switch (selection) {
+    case OusterReturn::kStrongest:
+      return "strongest";
+    case OusterReturn::kSecond:
+      return "second";
+    case OusterReturn::kLast:
+      return "last";
+  }
+  return "?";
+}
 
 OusterPixel ouster_pixel(std::span<const std::uint8_t> packet, const OusterMetadata& metadata,
                          int column, int beam) {
@@ -72,6 +95,13 @@ OusterPixel ouster_pixel(std::span<const std::uint8_t> packet, const OusterMetad
 
 OusterDecoder::OusterDecoder(OusterMetadata metadata, OusterDecoderOptions options)
     : metadata_(std::move(metadata)), options_(options), model_(ouster_sensor_model(metadata_)) {
+  if (options_.return_selection != OusterReturn::kStrongest &&
+      metadata_.profile != OusterProfile::kRng19Rfl8Sig16Nir16Dual) {
+    throw core::InputError(metadata_.source + ": the " + to_string(options_.return_selection) +
+                           " return needs the RNG19_RFL8_SIG16_NIR16_DUAL profile, but the " +
+                           "sensor sends " + to_string(metadata_.profile) +
+                           " (one return per pixel: the strongest)");
+  }
   const auto beams = static_cast<std::size_t>(metadata_.pixels_per_column);
   ring_of_beam_.resize(beams);
   cos_alt_.resize(beams);
@@ -122,9 +152,12 @@ Eigen::Vector3d OusterDecoder::point(int beam, int measurement_id, double range_
   // cos/sin(encoder + beam azimuth) by the angle-addition formulas.
   const double c = cos_enc_[m] * cos_beam_az_[b] - sin_enc_[m] * sin_beam_az_[b];
   const double s = sin_enc_[m] * cos_beam_az_[b] + cos_enc_[m] * sin_beam_az_[b];
-  const double x = r * c * cos_alt_[b] + n * cos_enc_[m];
-  const double y = r * s * cos_alt_[b] + n * sin_enc_[m];
-  const double z = r * sin_alt_[b];
+  const double bx = metadata_.beam_x_mm;
+  const double x = r * c * cos_alt_[b] + bx * cos_enc_[m];
+  const double y = r * s * cos_alt_[b] + bx * sin_enc_[m];
+  double z = r * sin_alt_[b];
+  // Only newer metadata lifts the beam origin; adding 0 could turn a -0 into +0.
+  if (metadata_.beam_z_mm != 0.0) z += metadata_.beam_z_mm;
   const auto& R = rotation_;
   return Eigen::Vector3d(R[0] * x + R[1] * y + R[2] * z + translation_mm_[0],
                          R[3] * x + R[4] * y + R[5] * z + translation_mm_[1],
@@ -171,6 +204,7 @@ void OusterDecoder::add_packet(std::span<const std::uint8_t> payload, std::int64
   const std::size_t pixels = static_cast<std::size_t>(beams) * metadata_.pixel_bytes();
   const auto min_range = static_cast<float>(model_.min_range_m);
   const auto max_range = static_cast<float>(model_.max_range_m);
+  const bool other_return = options_.return_selection != OusterReturn::kStrongest;
   for (int col = 0; col < metadata_.columns_per_packet; ++col) {
     const std::uint8_t* block = p + column_offset(metadata_, col);
     const auto stamp = static_cast<std::int64_t>(le64(block));
@@ -193,6 +227,7 @@ void OusterDecoder::add_packet(std::span<const std::uint8_t> payload, std::int64
     for (int b = 0; b < beams; ++b, q += stride) {
       OusterPixel px;
       read_pixel(q, metadata_.profile, px);
+      if (other_return) select_return(options_.return_selection, px);
       if (px.range_mm == 0) continue;
       // Destaggered: the beam's pixel moves by its shift so that a column holds one direction.
       int c = m + metadata_.pixel_shift_by_row[static_cast<std::size_t>(b)];

@@ -16,9 +16,22 @@
 
 namespace ringtrack::sensors::ouster {
 
+/// Which return of a pixel fills its cell. The _DUAL profile reports two returns per pixel,
+/// return 1 the strongest and return 2 the second strongest (Ouster's manual); the other
+/// profiles report the strongest only.
+enum class OusterReturn : std::uint8_t {
+  kStrongest,  ///< return 1 (every profile)
+  kSecond,     ///< return 2, the second strongest (_DUAL only; empty where there is none)
+  kLast,       ///< the farther of returns 1 and 2 (_DUAL only; return 1 where 2 is empty)
+};
+
+/// Name of a return selection: strongest, second, last.
+std::string to_string(OusterReturn selection);
+
 /// Options of the decoder.
 struct OusterDecoderOptions {
   bool keep_partial_scans{false};  ///< emit frames with columns of the window missing
+  OusterReturn return_selection{OusterReturn::kStrongest};  ///< which return fills a cell
 };
 
 /// Counters; every skipped packet and missing column is counted here.
@@ -38,6 +51,7 @@ struct OusterPixel {
   std::uint32_t range_mm{0};   ///< first return (0 = none)
   std::uint32_t range2_mm{0};  ///< second return of the _DUAL profile
   std::uint16_t reflectivity{0};
+  std::uint16_t reflectivity2{0};  ///< second return's reflectivity (_DUAL)
 };
 
 /// Reads pixel `beam` of column `column` of a packet of the metadata's format (no checks).
@@ -47,7 +61,8 @@ OusterPixel ouster_pixel(std::span<const std::uint8_t> packet, const OusterMetad
 /// Turns a stream of Ouster lidar packets into OrganizedScans.
 class OusterDecoder {
  public:
-  /// Throws core::InputError when the metadata is unusable.
+  /// Throws core::InputError when the metadata is unusable or its profile cannot give the
+  /// selected return (a single-return profile and the second or last return).
   OusterDecoder(OusterMetadata metadata, OusterDecoderOptions options = {});
 
   /// Decodes one lidar packet (UDP payload, port 7502) received at host_stamp_ns (unused: the

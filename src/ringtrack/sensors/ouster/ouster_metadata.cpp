@@ -1,6 +1,7 @@
 #include "ringtrack/sensors/ouster/ouster_metadata.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numbers>
@@ -51,6 +52,26 @@ int integer(const json& v, const char* key, const std::string& source, int lo, i
                      std::to_string(hi));
   }
   return v.get<int>();
+}
+
+// The beam origin: newer metadata (firmware 3.x) gives beam_to_lidar_transform, a 4x4 row-major
+// matrix whose translation is the beam origin (x out along the encoder direction, z up, mm);
+// older metadata gives its distance alone (lidar_origin_to_beam_origin_mm, in the plane). The
+// transform's rotation is the identity on every sensor and is not used.
+void read_beam_origin(const json& root, const std::string& source, OusterMetadata& m) {
+  if (const json* t = find_key(root, "beam_to_lidar_transform")) {
+    const auto b = numbers(*t, "beam_to_lidar_transform", source);
+    if (b.size() != 16) fail(source, "'beam_to_lidar_transform' must hold 16 numbers");
+    m.beam_x_mm = b[3];
+    m.beam_z_mm = b[11];
+    m.origin_to_beam_mm = std::hypot(m.beam_x_mm, m.beam_z_mm);
+    return;
+  }
+  const json& origin = need(root, "lidar_origin_to_beam_origin_mm", source);
+  if (!origin.is_number()) fail(source, "'lidar_origin_to_beam_origin_mm' is not a number");
+  m.origin_to_beam_mm = origin.get<double>();
+  m.beam_x_mm = m.origin_to_beam_mm;
+  m.beam_z_mm = 0.0;
 }
 
 }  // namespace
@@ -115,9 +136,7 @@ OusterMetadata parse_ouster_metadata(const std::string& text, const std::string&
       numbers(need(root, "beam_altitude_angles", source), "beam_altitude_angles", source);
   m.beam_azimuth_deg =
       numbers(need(root, "beam_azimuth_angles", source), "beam_azimuth_angles", source);
-  const json& origin = need(root, "lidar_origin_to_beam_origin_mm", source);
-  if (!origin.is_number()) fail(source, "'lidar_origin_to_beam_origin_mm' is not a number");
-  m.origin_to_beam_mm = origin.get<double>();
+  read_beam_origin(root, source, m);
   const auto transform =
       numbers(need(root, "lidar_to_sensor_transform", source), "lidar_to_sensor_transform", source);
   if (transform.size() != 16) fail(source, "'lidar_to_sensor_transform' must hold 16 numbers");

@@ -1,7 +1,8 @@
 #pragma once
 /// The metadata JSON of an Ouster sensor (what the sensor reports and ouster-sdk saves beside a
-/// recording): beam angles, beam origin offset, lidar-to-sensor transform and the packet data
-/// format. See docs/ouster.md.
+/// recording): beam angles, beam origin offset (beam_to_lidar_transform or
+/// lidar_origin_to_beam_origin_mm), lidar-to-sensor transform and the packet data format. See
+/// docs/ouster.md.
 
 #include <array>
 #include <filesystem>
@@ -25,11 +26,18 @@ std::string to_string(OusterProfile profile);
 
 /// What ringtrack needs of the metadata.
 struct OusterMetadata {
-  std::string source;                        ///< file name (for messages)
-  std::string product;                       ///< e.g. "OS-1-128" (prod_line), if present
-  std::vector<double> beam_altitude_deg;     ///< per beam (row), as sent
-  std::vector<double> beam_azimuth_deg;      ///< per beam, offset from the encoder angle
-  double origin_to_beam_mm{0};               ///< lidar_origin_to_beam_origin_mm
+  std::string source;                     ///< file name (for messages)
+  std::string product;                    ///< e.g. "OS-1-128" (prod_line), if present
+  std::vector<double> beam_altitude_deg;  ///< per beam (row), as sent
+  std::vector<double> beam_azimuth_deg;   ///< per beam, offset from the encoder angle
+  /// Distance from the lidar origin to the beam origin, subtracted from ranges:
+  /// lidar_origin_to_beam_origin_mm, or the length of beam_to_lidar_transform's translation.
+  double origin_to_beam_mm{0};
+  /// The beam origin's offset along the encoder direction and its height (mm): the translation
+  /// of beam_to_lidar_transform when the metadata has one (newer firmware), else
+  /// (lidar_origin_to_beam_origin_mm, 0).
+  double beam_x_mm{0};
+  double beam_z_mm{0};
   std::array<double, 16> lidar_to_sensor{};  ///< row-major 4x4, translation in mm
   int columns_per_frame{1024};
   int columns_per_packet{16};
