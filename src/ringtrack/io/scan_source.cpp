@@ -5,6 +5,7 @@
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/io/hesai_pcap_source.hpp"
+#include "ringtrack/io/hesai_udp_source.hpp"
 #include "ringtrack/io/mcap_bag_reader.hpp"
 #include "ringtrack/io/ouster_pcap_source.hpp"
 #include "ringtrack/io/ouster_udp_source.hpp"
@@ -104,6 +105,27 @@ sensors::ouster::OusterDecoderOptions ouster_options(const ScanSourceOptions& op
       break;
   }
   return o;
+}
+
+// A live stream: nothing to recognise before it flows, so the files given decide: Ouster with
+// its metadata, Hesai with its angle corrections (or a Hesai model named, which then needs
+// them), Velodyne otherwise.
+std::unique_ptr<ScanSource> open_udp(const std::string& uri, const ScanSourceOptions& options) {
+  if (!options.metadata.empty()) {
+    return open_ouster_udp_source(uri, sensors::ouster::read_ouster_metadata(options.metadata),
+                                  ouster_options(options), options.velodyne);
+  }
+  if (!options.calibration.empty() || is_hesai_model_name(options.velodyne.decoder.model)) {
+    if (options.calibration.empty()) {
+      throw core::InputError(uri + ": Hesai " + options.velodyne.decoder.model +
+                             " packets; give the sensor's angle-correction file with "
+                             "--calibration FILE");
+    }
+    auto h = hesai_options(options);
+    h.calibration = sensors::hesai::read_hesai_calibration(options.calibration);
+    return open_hesai_udp_source(uri, std::move(h), options.velodyne);
+  }
+  return open_velodyne_udp_source(uri, options.velodyne);
 }
 
 // A capture: Ouster when its metadata is given, Hesai when named or recognised (its angle
@@ -219,11 +241,7 @@ std::unique_ptr<ScanSource> open_source(const std::string& uri, const ScanSource
     case ScanInputFormat::kPcap:
       return open_pcap(uri, options);
     case ScanInputFormat::kUdp:
-      if (!options.metadata.empty()) {
-        return open_ouster_udp_source(uri, sensors::ouster::read_ouster_metadata(options.metadata),
-                                      ouster_options(options), options.velodyne);
-      }
-      return open_velodyne_udp_source(uri, options.velodyne);
+      return open_udp(uri, options);
     case ScanInputFormat::kRosbag1:
     case ScanInputFormat::kRosbag2:
       return open_bag(uri, format, options);

@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
@@ -10,17 +11,34 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/core/organized_scan.hpp"
 #include "ringtrack/io/text.hpp"
+#include "ringtrack/io/udp_packet_source.hpp"
 #include "support/temp_dir.hpp"
+#include "support/udp_replay.hpp"
 
 namespace ringtrack::io::test {
 
 /// A fresh folder per test (tests/support/temp_dir.hpp).
 using TempDir = ::ringtrack::test::TempDir;
+
+/// Sends the packets to a live UDP source on the loopback interface, waits until all arrived,
+/// stops it (completing the scan in progress when whole) and drains its queue.
+inline std::vector<core::OrganizedScan> receive_replayed(
+    UdpPacketSource& source, const std::vector<std::vector<std::uint8_t>>& packets) {
+  ::ringtrack::test::replay_to_loopback(packets, source.port());
+  for (int i = 0; i < 500 && source.stats().datagrams < packets.size(); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  source.stop();
+  std::vector<core::OrganizedScan> scans;
+  while (auto s = source.next(std::chrono::milliseconds(0))) scans.push_back(std::move(*s));
+  return scans;
+}
 
 inline std::string read_text(const std::filesystem::path& path) {
   const auto bytes = read_file_bytes(path);

@@ -87,19 +87,6 @@ Scans capture_scans(const fs::path& pcap, const OusterMetadata& meta, OusterDeco
   return scans;
 }
 
-// Sends the packets, waits until all arrived, stops (completing the frame in progress when whole)
-// and drains the queue.
-Scans receive(UdpPacketSource& source, const Packets& ps) {
-  rt::replay_to_loopback(ps, source.port());
-  for (int i = 0; i < 500 && source.stats().datagrams < ps.size(); ++i) {
-    std::this_thread::sleep_for(10ms);
-  }
-  source.stop();
-  Scans scans;
-  while (auto s = source.next(0ms)) scans.push_back(std::move(*s));
-  return scans;
-}
-
 void expect_same_scan(const core::OrganizedScan& got, const core::OrganizedScan& want) {
   ASSERT_EQ(got.rings(), want.rings());
   ASSERT_EQ(got.columns(), want.columns());
@@ -138,7 +125,7 @@ TEST_P(OusterUdpProfiles, LoopbackGivesTheCaptureScans) {
   ASSERT_GT(expected[0].valid_count(), 10'000u);
 
   OusterUdpSource source(loopback(100), meta, o);
-  const Scans scans = receive(source, ps);
+  const Scans scans = test::receive_replayed(source, ps);
   EXPECT_EQ(source.stats().datagrams, ps.size()) << source.summary();
   ASSERT_EQ(scans.size(), expected.size()) << source.summary();
   for (std::size_t s = 0; s < scans.size(); ++s) expect_same_scan(scans[s], expected[s]);
@@ -172,7 +159,7 @@ TEST(OusterUdp, SlowConsumerLosesWholeScansAndTheyAreCounted) {
   const Scans expected = capture_scans(write_capture(ps, tmp.path() / "o.pcap"), meta, {});
   ASSERT_EQ(expected.size(), 3u);
   OusterUdpSource source(loopback(1), meta);
-  const Scans scans = receive(source, ps);  // nobody reads meanwhile
+  const Scans scans = test::receive_replayed(source, ps);  // nobody reads meanwhile
   EXPECT_EQ(source.stats().dropped_scans, 2u) << source.summary();
   ASSERT_EQ(scans.size(), 1u);
   expect_same_scan(scans[0], expected.back());  // the freshest is kept
