@@ -40,7 +40,15 @@ std::string HesaiPcapSource::summary() const {
   const auto& r = reader_.stats();
   const auto& d = decoder_.stats();
   std::string s = std::to_string(r.frames) + " frames, " + std::to_string(d.decoded_packets) +
-                  " Hesai packets decoded, " + std::to_string(d.scans) + " scans";
+                  " Hesai packets decoded, " + std::to_string(d.scans) + " scans" +
+                  hesai_problem_counts(d);
+  if (other_datagrams_ > 0) s += ", " + std::to_string(other_datagrams_) + " other UDP ignored";
+  if (r.truncated) s += "; file truncated: " + r.truncation_message;
+  return s;
+}
+
+std::string hesai_problem_counts(const sensors::hesai::HesaiDecoderStats& d) {
+  std::string s;
   const auto add = [&s](const char* what, std::uint64_t n) {
     if (n > 0) s += ", " + std::to_string(n) + " " + what;
   };
@@ -50,11 +58,9 @@ std::string HesaiPcapSource::summary() const {
   add("unknown-return-mode", d.unknown_return_mode);
   add("return-mode-changed", d.mode_changed);
   add("repeated blocks", d.repeated_blocks);
-  add("other UDP ignored", other_datagrams_);
   add("lost firing blocks", d.lost_blocks);
   add("invalid columns", d.invalid_columns);
   add("partial scans dropped", d.partial_scans_dropped);
-  if (r.truncated) s += "; file truncated: " + r.truncation_message;
   return s;
 }
 

@@ -41,6 +41,10 @@ class HesaiPcapSource final : public ScanSource {
   bool finished_{false};
 };
 
+/// The Hesai decoder's non-zero problem counters as the summaries list them (", 3 wrong-size"
+/// each), for the capture's and the live source's summary lines.
+std::string hesai_problem_counts(const sensors::hesai::HesaiDecoderStats& d);
+
 /// True when the first UDP payload to `port` among the capture's first frames is a Hesai packet
 /// (sensors/hesai/hesai_format.hpp); false for Velodyne or when there is none.
 bool pcap_holds_hesai(const std::filesystem::path& path, std::uint16_t port);

@@ -2,6 +2,8 @@
 
 #include <utility>
 
+#include "ringtrack/io/hesai_pcap_source.hpp"
+
 namespace ringtrack::io {
 namespace {
 
@@ -28,20 +30,13 @@ class HesaiUdpDecoder final : public UdpPacketDecoder {
     std::string s = std::to_string(socket.datagrams) + " datagrams, " +
                     std::to_string(d.decoded_packets) + " Hesai packets decoded, " +
                     std::to_string(d.scans) + " scans";
-    const auto add = [&s](const char* what, std::uint64_t n) {
-      if (n > 0) s += ", " + std::to_string(n) + " " + what;
-    };
-    add("scans dropped (consumer behind)", socket.dropped_scans);
-    add("wrong-size", d.wrong_size);
-    add("bad-header", d.bad_header);
-    add("bad-azimuth", d.bad_azimuth);
-    add("unknown-return-mode", d.unknown_return_mode);
-    add("return-mode-changed", d.mode_changed);
-    add("repeated blocks", d.repeated_blocks);
-    add("lost firing blocks", d.lost_blocks);
-    add("invalid columns", d.invalid_columns);
-    add("partial scans dropped", d.partial_scans_dropped);
-    add("receive errors", socket.receive_errors);
+    if (socket.dropped_scans > 0) {
+      s += ", " + std::to_string(socket.dropped_scans) + " scans dropped (consumer behind)";
+    }
+    s += hesai_problem_counts(d);
+    if (socket.receive_errors > 0) {
+      s += ", " + std::to_string(socket.receive_errors) + " receive errors";
+    }
     return s;
   }
   [[nodiscard]] const sensors::hesai::HesaiDecoderStats& stats() const { return decoder_.stats(); }

@@ -67,29 +67,6 @@ Scans capture_scans(const fs::path& pcap, const sensors::hesai::HesaiDecoderOpti
   return scans;
 }
 
-// The same cells (status, range, intensity, point) at the same column azimuths; the stamps are
-// the packets' receive times, which differ by design.
-void expect_same_cells(const core::OrganizedScan& got, const core::OrganizedScan& want) {
-  ASSERT_EQ(got.rings(), want.rings());
-  ASSERT_EQ(got.columns(), want.columns());
-  ASSERT_EQ(got.statuses(), want.statuses());
-  for (std::size_t i = 0; i < want.size(); ++i) {
-    if (!want.valid(i)) continue;
-    ASSERT_EQ(got.range_m(i), want.range_m(i)) << "cell " << i;
-    ASSERT_EQ(got.intensity(i), want.intensity(i)) << "cell " << i;
-    ASSERT_EQ(got.point(i), want.point(i)) << "cell " << i;
-  }
-  EXPECT_EQ(got.column_azimuth_rad, want.column_azimuth_rad);
-}
-
-UdpOptions loopback(std::size_t max_queued_scans) {
-  UdpOptions o;
-  o.host = "127.0.0.1";
-  o.port = 0;
-  o.max_queued_scans = max_queued_scans;
-  return o;
-}
-
 TEST(HesaiUdp, LoopbackGivesTheCaptureCells) {
   test::TempDir tmp;
   const rt::HesaiEncoder enc({});
@@ -99,7 +76,7 @@ TEST(HesaiUdp, LoopbackGivesTheCaptureCells) {
   ASSERT_GE(expected.size(), 2u);
   ASSERT_GT(expected[0].valid_count(), 10'000u);
 
-  HesaiUdpSource source(loopback(100), options);
+  HesaiUdpSource source(test::loopback_udp(100), options);
   const auto now_ns = [] {
     return std::chrono::duration_cast<std::chrono::nanoseconds>(
                std::chrono::system_clock::now().time_since_epoch())
@@ -111,7 +88,7 @@ TEST(HesaiUdp, LoopbackGivesTheCaptureCells) {
   EXPECT_EQ(source.stats().datagrams, ps.size()) << source.summary();
   ASSERT_EQ(scans.size(), expected.size()) << source.summary();
   for (std::size_t s = 0; s < scans.size(); ++s) {
-    expect_same_cells(scans[s], expected[s]);
+    test::expect_same_decoded_cells(scans[s], expected[s]);  // stamps: receive times, below
     // Stamped from the kernel's receive times (less the packet's firings, at most a millisecond
     // before it arrived): within the replay. Not necessarily ascending: the replay sends in
     // bursts, a sensor evenly.
@@ -136,7 +113,7 @@ TEST(HesaiUdp, WrongSizeDatagramsAreCountedNotFatal) {
   Packets ps = hesai_packets(enc, 2.5);
   ps.insert(ps.begin() + 100, std::vector<std::uint8_t>(77, 0xEE));
   ps.insert(ps.begin() + 300, std::vector<std::uint8_t>(ps[0].begin(), ps[0].end() - 9));
-  HesaiUdpSource source(loopback(100), decoder_options(enc.channels()));
+  HesaiUdpSource source(test::loopback_udp(100), decoder_options(enc.channels()));
   const Scans scans = test::receive_replayed(source, ps);
   EXPECT_GE(scans.size(), 2u) << source.summary();
   EXPECT_EQ(source.decoder_stats().skipped_packets(), 2u) << source.summary();

@@ -26,6 +26,31 @@ namespace ringtrack::io::test {
 /// A fresh folder per test (tests/support/temp_dir.hpp).
 using TempDir = ::ringtrack::test::TempDir;
 
+/// Options of a live UDP source on 127.0.0.1 at a free port (source.port() says which).
+inline UdpOptions loopback_udp(std::size_t max_queued_scans) {
+  UdpOptions o;
+  o.host = "127.0.0.1";
+  o.port = 0;
+  o.max_queued_scans = max_queued_scans;
+  return o;
+}
+
+/// The same decoded cells (status, range, intensity, point) at the same column azimuths; stamps
+/// are not compared (a live source stamps by receive time).
+inline void expect_same_decoded_cells(const core::OrganizedScan& got,
+                                      const core::OrganizedScan& want) {
+  ASSERT_EQ(got.rings(), want.rings());
+  ASSERT_EQ(got.columns(), want.columns());
+  ASSERT_EQ(got.statuses(), want.statuses());
+  for (std::size_t i = 0; i < want.size(); ++i) {
+    if (!want.valid(i)) continue;
+    ASSERT_EQ(got.range_m(i), want.range_m(i)) << "cell " << i;
+    ASSERT_EQ(got.intensity(i), want.intensity(i)) << "cell " << i;
+    ASSERT_EQ(got.point(i), want.point(i)) << "cell " << i;
+  }
+  EXPECT_EQ(got.column_azimuth_rad, want.column_azimuth_rad);
+}
+
 /// Sends the packets to a live UDP source on the loopback interface, waits until all arrived,
 /// stops it (completing the scan in progress when whole) and drains its queue.
 inline std::vector<core::OrganizedScan> receive_replayed(

@@ -88,26 +88,9 @@ Scans capture_scans(const fs::path& pcap, const OusterMetadata& meta, OusterDeco
 }
 
 void expect_same_scan(const core::OrganizedScan& got, const core::OrganizedScan& want) {
-  ASSERT_EQ(got.rings(), want.rings());
-  ASSERT_EQ(got.columns(), want.columns());
-  ASSERT_EQ(got.statuses(), want.statuses());
-  for (std::size_t i = 0; i < want.size(); ++i) {
-    if (!want.valid(i)) continue;
-    ASSERT_EQ(got.range_m(i), want.range_m(i)) << "cell " << i;
-    ASSERT_EQ(got.intensity(i), want.intensity(i)) << "cell " << i;
-    ASSERT_EQ(got.point(i), want.point(i)) << "cell " << i;
-  }
-  EXPECT_EQ(got.column_azimuth_rad, want.column_azimuth_rad);
+  test::expect_same_decoded_cells(got, want);
   EXPECT_EQ(got.column_stamp_ns, want.column_stamp_ns);
   EXPECT_EQ(got.stamp_ns, want.stamp_ns);
-}
-
-UdpOptions loopback(std::size_t max_queued_scans) {
-  UdpOptions o;
-  o.host = "127.0.0.1";
-  o.port = 0;
-  o.max_queued_scans = max_queued_scans;
-  return o;
 }
 
 class OusterUdpProfiles : public ::testing::TestWithParam<std::tuple<const char*, OusterReturn>> {};
@@ -124,7 +107,7 @@ TEST_P(OusterUdpProfiles, LoopbackGivesTheCaptureScans) {
   ASSERT_EQ(expected.size(), 2u);  // frames 7 and 8; frame 9 is partial
   ASSERT_GT(expected[0].valid_count(), 10'000u);
 
-  OusterUdpSource source(loopback(100), meta, o);
+  OusterUdpSource source(test::loopback_udp(100), meta, o);
   const Scans scans = test::receive_replayed(source, ps);
   EXPECT_EQ(source.stats().datagrams, ps.size()) << source.summary();
   ASSERT_EQ(scans.size(), expected.size()) << source.summary();
@@ -158,7 +141,7 @@ TEST(OusterUdp, SlowConsumerLosesWholeScansAndTheyAreCounted) {
   const Packets ps = ouster_packets(eo, 3.5);
   const Scans expected = capture_scans(write_capture(ps, tmp.path() / "o.pcap"), meta, {});
   ASSERT_EQ(expected.size(), 3u);
-  OusterUdpSource source(loopback(1), meta);
+  OusterUdpSource source(test::loopback_udp(1), meta);
   const Scans scans = test::receive_replayed(source, ps);  // nobody reads meanwhile
   EXPECT_EQ(source.stats().dropped_scans, 2u) << source.summary();
   ASSERT_EQ(scans.size(), 1u);
@@ -218,7 +201,7 @@ TEST(OusterUdp, BadInputIsOneLineError) {
   // Packets of another sensor (32 beams where the metadata says 16): the receiver's error
   // reaches the consumer.
   {
-    OusterUdpSource source(loopback(2), meta);
+    OusterUdpSource source(test::loopback_udp(2), meta);
     rt::OusterEncoderOptions other = eo;
     other.pixels_per_column = 32;
     rt::replay_to_loopback(ouster_packets(other, 0.1), source.port());
@@ -241,7 +224,7 @@ TEST(OusterUdp, BadInputIsOneLineError) {
   OusterDecoderOptions second;
   second.return_selection = OusterReturn::kSecond;
   try {
-    OusterUdpSource source(loopback(2), meta, second);
+    OusterUdpSource source(test::loopback_udp(2), meta, second);
     ADD_FAILURE() << "no error";
   } catch (const core::InputError& e) {
     EXPECT_STREQ(e.what(),
