@@ -27,12 +27,15 @@
 #include "ringtrack/io/sequence.hpp"
 #include "support/rosbag_writers.hpp"
 #include "support/run_command.hpp"
+#include "support/udp_replay.hpp"
 #include "support/velodyne_encoder.hpp"
 
 namespace ringtrack {
 namespace {
 
 namespace fs = std::filesystem;
+using test::free_udp_port;
+using test::udp_port_bound;
 using testing::run_command;
 using namespace std::chrono_literals;
 const std::string kCli = RINGTRACK_CLI_PATH;
@@ -348,31 +351,6 @@ TEST_F(RunSequenceRobustness, FailedRunOverAnEarlierCompleteOneIsMarkedIncomplet
                              " --no-plots --on-bad-scan stop --out " + out.string());
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(run_json(out)["complete"], false);
-}
-
-// A UDP port free right now on 127.0.0.1.
-std::uint16_t free_udp_port() {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  sockaddr_in a{};
-  a.sin_family = AF_INET;
-  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-  ::bind(fd, reinterpret_cast<const sockaddr*>(&a), sizeof a);
-  socklen_t len = sizeof a;
-  ::getsockname(fd, reinterpret_cast<sockaddr*>(&a), &len);
-  ::close(fd);
-  return ntohs(a.sin_port);
-}
-
-// True once some socket is bound to the UDP port (/proc/net/udp lists local ports in hex).
-bool udp_port_bound(std::uint16_t port) {
-  std::ifstream in("/proc/net/udp");
-  std::string line;
-  char hex[8];
-  std::snprintf(hex, sizeof hex, ":%04X ", port);
-  while (std::getline(in, line)) {
-    if (line.find(hex) != std::string::npos) return true;
-  }
-  return false;
 }
 
 struct Stopped {
