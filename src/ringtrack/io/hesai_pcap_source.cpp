@@ -6,7 +6,8 @@
 namespace ringtrack::io {
 
 HesaiPcapSource::HesaiPcapSource(const std::filesystem::path& path, std::uint16_t data_port,
-                                 sensors::hesai::HesaiDecoderOptions options, bool allow_truncated)
+                                 const sensors::hesai::HesaiDecoderOptions& options,
+                                 bool allow_truncated)
     : reader_(path, allow_truncated), port_(data_port), decoder_(options) {
   sensors::hesai::HesaiDecoder probe(options);
   check_first_packet(path, port_, probe);

@@ -19,7 +19,7 @@ class HesaiPcapSource final : public ScanSource {
  public:
   /// Opens the capture; throws core::InputError (file) or core::ConfigError (options).
   HesaiPcapSource(const std::filesystem::path& path, std::uint16_t data_port,
-                  sensors::hesai::HesaiDecoderOptions options, bool allow_truncated = true);
+                  const sensors::hesai::HesaiDecoderOptions& options, bool allow_truncated = true);
   /// The next scan, or nullopt at the end; throws core::InputError naming the file and frame.
   std::optional<core::OrganizedScan> next() override;
   /// The sensor model (known after the first packet).
