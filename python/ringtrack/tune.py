@@ -65,6 +65,10 @@ def parse_args(argv):
                    "ms (pipeline ms per scan)")
     p.add_argument("--loocv", action="store_true",
                    help="leave-one-out: per run, tune on the others and score the left-out one")
+    p.add_argument("--no-base-trial", action="store_true",
+                   help="do not start each study with the base configuration's values (by "
+                   "default its first trial runs them, so the best is never worse on the "
+                   "training runs than the base)")
     p.add_argument("--workers", type=int, default=1,
                    help="processes on this machine sharing the study (default 1)")
     p.add_argument("--storage", default="",
@@ -227,7 +231,9 @@ def settings_of(args):
             "duration": args.duration, "space": args.space}
 
 
-def optimise(args, storage, folds, space, base_yaml, objectives, worker_index):
+def optimise(args, storage, folds, space, base_yaml, objectives, worker_index, base=None):
+    """Runs each fold's study to args.trials finished trials. base: the parameters the main
+    process enqueues as a study's first trial (once per study; workers pass None)."""
     import optuna
     from optuna.study import MaxTrialsCallback
 
@@ -243,6 +249,8 @@ def optimise(args, storage, folds, space, base_yaml, objectives, worker_index):
             study.set_user_attr("settings", settings_of(args))
         if len(study.get_trials(deepcopy=False, states=states)) >= args.trials:
             continue
+        if base is not None:
+            study.enqueue_trial(base, user_attrs={"base": True}, skip_if_exists=True)
         objective = tuning.Objective(space, train, test, base_yaml, objectives, worker)
         study.optimize(objective, callbacks=[MaxTrialsCallback(args.trials, states=states),
                                              Progress(args, fold, args.trials)])
@@ -339,8 +347,13 @@ def single_report(args, out, study, base_yaml, space):
     lines = [f"Best of {len(study.trials)} trials: trial {best.number}, training MOTA "
              f"{best.user_attrs['train_mota']:.4f} (cost {best.values[0]:.4f}), IDF1 "
              f"{best.user_attrs['train_idf1']:.4f}, {best.user_attrs['ms_per_scan']:.3f} ms "
-             "per scan.", "", "`best.yaml` holds the whole configuration (`ringtrack run --config "
-             "best.yaml`).", "", "| key | base | best |", "| --- | ---: | ---: |"]
+             "per scan.", ""]
+    base = tuning.base_trial(study)
+    if base is not None:
+        lines += [f"Trial {base.number} ran the base configuration: training MOTA "
+                  f"{base.user_attrs['train_mota']:.4f}.", ""]
+    lines += ["`best.yaml` holds the whole configuration (`ringtrack run --config best.yaml`).",
+              "", "| key | base | best |", "| --- | ---: | ---: |"]
     for p in space:
         value = best.params[p.key]
         shown = f"{value:.4g}" if isinstance(value, float) else str(value)
@@ -354,25 +367,34 @@ def loocv_report(args, out, studies, folds, base_yaml):
     lines = ["## Leave-one-out cross-validation", "",
              "Per fold: tuned on every other run, the best trial (lowest training cost) scored "
              "on the left-out run; r = Pearson correlation of training and test MOTA over the "
-             "fold's trials (the paper's Fig. 5).", "",
-             "| left out | trials | best training MOTA | test MOTA | r |",
-             "| --- | ---: | ---: | ---: | ---: |"]
+             "fold's trials (the paper's Fig. 5). The base columns are the fold's trial that ran "
+             "the base configuration (none with --no-base-trial).", "",
+             "| left out | trials | best training MOTA | test MOTA | base training MOTA | "
+             "base test MOTA | r |", "| --- | ---: | ---: | ---: | ---: | ---: | ---: |"]
     correlations, errors, gt = {}, 0.0, 0
+    base_errors, base_gt = 0.0, 0
     for fold, _, _ in folds:
         study = studies[fold]
         best = tuning.best_trial(study)
         xs, ys, r = tuning.fold_correlation(study)
         correlations[fold] = (xs, ys, r)
         if best is None:
-            lines.append(f"| {fold} | {len(study.trials)} | - | - | - |")
+            lines.append(f"| {fold} | {len(study.trials)} | - | - | - | - | - |")
             continue
         config = tuning.config_for(best.params, base_yaml)
         (out / f"best-{fold}.yaml").write_text(config.to_yaml(), encoding="utf-8")
         a = best.user_attrs
         errors += a["test_errors"]
         gt += a["test_gt"]
+        base = tuning.base_trial(study)
+        base_text = "- | -"
+        if base is not None:
+            b = base.user_attrs
+            base_errors += b["test_errors"]
+            base_gt += b["test_gt"]
+            base_text = f"{b['train_mota']:.4f} | {b['test_mota']:.4f}"
         lines.append(f"| {fold} | {len(study.trials)} | {a['train_mota']:.4f} | "
-                     f"{a['test_mota']:.4f} | {r:.2f} |")
+                     f"{a['test_mota']:.4f} | {base_text} | {r:.2f} |")
     total = 1 - errors / gt if gt else float("nan")
     finite = sorted(r for _, _, r in correlations.values() if math.isfinite(r))
     median_r = finite[len(finite) // 2] if finite else float("nan")
@@ -380,6 +402,10 @@ def loocv_report(args, out, studies, folds, base_yaml):
               f"fold's best configuration): **{total:.4f}**; median r {median_r:.2f} "
               f"(range {finite[0]:.2f} to {finite[-1]:.2f})." if finite else
               f"**Total test MOTA**: **{total:.4f}**.", ""]
+    if base_gt:
+        lines += [f"The base configuration on the same left-out runs: total test MOTA "
+                  f"{1 - base_errors / base_gt:.4f}"
+                  f"{'' if base_gt == gt else ' (not every fold has a base trial)'}.", ""]
     if tuning.plot_correlations(out / "loocv.png", correlations):
         lines += ["![training vs test MOTA](loocv.png)", ""]
     return lines
@@ -483,6 +509,12 @@ def tune_into(args, argv, out, storage, space, objectives, builtins, base_yaml):
     log(args, f"recorded {len(runs)} runs ({sum(len(r) for r in runs)} scans, "
         f"{sum(r.memory_bytes for r in runs) / 2**20:.0f} MiB) in {time.monotonic() - start:.1f} s")
     folds = folds_of(runs, args.loocv)
+    base = None
+    if not args.worker and not args.no_base_trial:
+        base, outside = tuning.base_params(space, base_yaml)
+        if outside:
+            log(args, f"the base value of {', '.join(outside)} lies outside the search space: "
+                "the first trial samples it")
     if args.worker:
         try:
             optimise(args, storage, folds, space, base_yaml, objectives, worker_index)
@@ -490,7 +522,7 @@ def tune_into(args, argv, out, storage, space, objectives, builtins, base_yaml):
             return interrupted_status()
         return 0
     try:
-        optimise(args, storage, folds, space, base_yaml, objectives, worker_index)
+        optimise(args, storage, folds, space, base_yaml, objectives, worker_index, base)
         reap(args, storage, children)
     except KeyboardInterrupt:
         stop_workers(children)

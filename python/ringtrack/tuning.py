@@ -103,6 +103,31 @@ def _check_value(where, key, value):
         raise TuneError(f"{where}: {value!r} is outside the key's allowed values ({e})") from None
 
 
+def base_params(space, base_yaml):
+    """The base configuration's value of every key of the space whose value lies inside the
+    key's range (or among its choices): enqueued as the first trial of each study, so that the
+    best trial is never worse on the training runs than the configuration the study started from.
+    Returns (params, keys outside the space); the sampler draws the keys outside."""
+    config = rt.Config.from_yaml(base_yaml, "base configuration")
+    params, outside = {}, []
+    for p in space:
+        value = yaml.safe_load(config.get_text(p.key))
+        if p.kind == "choice":
+            inside = value in p.choices
+        else:
+            number = isinstance(value, (int, float)) and not isinstance(value, bool)
+            inside = number and p.low <= value <= p.high
+            if inside and p.kind == "int":
+                inside = float(value).is_integer()
+            if inside:
+                value = int(value) if p.kind == "int" else float(value)
+        if inside:
+            params[p.key] = value
+        else:
+            outside.append(p.key)
+    return params, outside
+
+
 def config_for(params, base_yaml):
     """The base configuration with a trial's parameters applied (ConfigError when invalid)."""
     config = rt.Config.from_yaml(base_yaml, "base configuration")
@@ -199,15 +224,25 @@ def best_trial(study):
     return min(done, key=lambda t: t.values[0])
 
 
+def base_trial(study):
+    """The completed trial that ran the base configuration (`base_params`), or None."""
+    import optuna
+
+    done = [t for t in study.trials
+            if t.user_attrs.get("base") and t.state == optuna.trial.TrialState.COMPLETE]
+    return done[0] if done else None
+
+
 def write_trials_csv(path, studies):
-    """Every trial of every study: fold, number, state, costs, MOTAs, seconds, parameters."""
+    """Every trial of every study: fold, number, state, costs, MOTAs, seconds, whether it ran the
+    base configuration, parameters."""
     import optuna
 
     keys = sorted({k for s in studies.values() for t in s.trials for k in t.params})
     with open(path, "w", newline="", encoding="utf-8") as f:
         w = csv.writer(f)
         w.writerow(["fold", "trial", "state", "cost", "train_mota", "test_mota", "train_idf1",
-                     "ms_per_scan", "seconds", "worker", *keys])
+                     "ms_per_scan", "seconds", "worker", "base", *keys])
         for fold, study in studies.items():
             for t in study.trials:
                 a = t.user_attrs
@@ -215,7 +250,7 @@ def write_trials_csv(path, studies):
                 w.writerow([fold, t.number, t.state.name, cost, a.get("train_mota", ""),
                             a.get("test_mota", ""), a.get("train_idf1", ""),
                             a.get("ms_per_scan", ""), a.get("seconds", ""), a.get("worker", ""),
-                            *[t.params.get(k, "") for k in keys]])
+                            1 if a.get("base") else 0, *[t.params.get(k, "") for k in keys]])
 
 
 def fold_correlation(study):

@@ -72,10 +72,16 @@ def test_bad_space_files_name_the_problem(tmp_path, text, message):
     assert not (tmp_path / "out").exists()  # nothing written
 
 
-def test_shipped_space_is_valid():
+def test_shipped_spaces_are_valid():
     space = tuning.load_space(SOURCE_DIR / "config" / "tune_space.yaml")
     keys = {p.key.split(".")[0] for p in space}
     assert keys == {"segmentation", "detection", "tracking"}
+    core = tuning.load_space(SOURCE_DIR / "config" / "tune_space_core.yaml")
+    full = {p.key: p for p in space}
+    assert len(core) == 6
+    for p in core:  # a subset of the full space with the same ranges
+        assert (p.kind, p.low, p.high, p.log) == (full[p.key].kind, full[p.key].low,
+                                                  full[p.key].high, full[p.key].log)
 
 
 def test_pearson_matches_numpy():
@@ -119,6 +125,37 @@ def test_study_writes_outputs_and_resumes(tmp_path):
     assert r.returncode == 2 and "no study 'nothing-here'" in r.stderr
 
 
+def test_first_trial_runs_the_base_configuration(tmp_path):
+    base = tmp_path / "base.yaml"
+    base.write_text("tracking:\n  process_noise: 0.37\n  confirm_hits: 3\n")
+    space = write_space(tmp_path, "parameters:\n"
+                        "  tracking.process_noise: {type: float, low: 0.02, high: 2.0, log: true}\n"
+                        "  tracking.confirm_hits: {type: int, low: 1, high: 4}\n"
+                        "  detection.min_cluster_points: {type: int, low: 4, high: 6}\n")
+    out = tmp_path / "base"
+    r = tune("--trials", 3, "--config", base, "--space", space, "--out", out, "--scenarios", "1",
+             "--duration", "2")
+    # The default min_cluster_points (3) is outside [4, 6]: said, and sampled.
+    assert "detection.min_cluster_points lies outside the search space" in r.stderr
+    rows = trials(out / "trials.csv")
+    assert [r["base"] for r in rows] == ["1", "0", "0"]
+    first = rows[0]
+    assert float(first["tracking.process_noise"]) == 0.37
+    assert int(first["tracking.confirm_hits"]) == 3
+    assert 4 <= int(first["detection.min_cluster_points"]) <= 6
+    report = (out / "report.md").read_text()
+    assert f"Trial 0 ran the base configuration: training MOTA {float(first['train_mota']):.4f}" \
+        in report
+    best = min((r for r in rows if r["state"] == "COMPLETE"), key=lambda r: float(r["cost"]))
+    assert float(best["train_mota"]) >= float(first["train_mota"])
+    tune("--trials", 4, "--config", base, "--space", space, "--out", out, *SMALL)  # resumed:
+    assert [r["base"] for r in trials(out / "trials.csv")] == ["1", "0", "0", "0"]  # not again
+    out = tmp_path / "sampled"
+    tune("--trials", 2, "--no-base-trial", "--out", out, *SMALL)
+    assert [r["base"] for r in trials(out / "trials.csv")] == ["0", "0"]
+    assert "ran the base configuration" not in (out / "report.md").read_text()
+
+
 def test_loocv_reports_test_mota_and_correlation(tmp_path):
     out = tmp_path / "loocv"
     tune("--trials", 4, "--loocv", "--out", out, *SMALL)
@@ -135,6 +172,13 @@ def test_loocv_reports_test_mota_and_correlation(tmp_path):
         if r_value is not None:
             assert f"| {fold} |" in report and f"{r_value:.2f}" in report
         assert (out / f"best-{fold}.yaml").exists()
+        base = [r for r in rows if r["fold"] == fold and r["base"] == "1"]
+        assert len(base) == 1  # each fold's study started from the defaults once
+        best = min(done, key=lambda r: float(r["cost"]))
+        assert float(best["train_mota"]) >= float(base[0]["train_mota"])
+        assert f"| {float(base[0]['train_mota']):.4f} | {float(base[0]['test_mota']):.4f} |" \
+            in report
+    assert "The base configuration on the same left-out runs: total test MOTA" in report
     assert (out / "loocv.png").stat().st_size > 1000
 
 
