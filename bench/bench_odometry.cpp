@@ -35,6 +35,7 @@ void BM_OdometryScan(benchmark::State& state) {
   core::OrganizedScan scan;
   int next = kScans;
   double degenerate = 0;
+  double iterations = 0;
   for (auto _ : state) {
     state.PauseTiming();
     if (next == kScans) {  // start over, warmed up outside the timing
@@ -46,10 +47,14 @@ void BM_OdometryScan(benchmark::State& state) {
     }
     scan = data[next].scan;  // the odometry compensates the scan in place
     state.ResumeTiming();
-    degenerate += odometry->process(scan).degenerate ? 1 : 0;
+    const odometry::OdometryResult result = odometry->process(scan);
+    degenerate += result.degenerate ? 1 : 0;
+    iterations += result.iterations;
     ++next;
   }
   state.counters["degenerate"] = benchmark::Counter(degenerate, benchmark::Counter::kAvgIterations);
+  // ICP iterations per scan, all passes: what the convergence settings cost.
+  state.counters["iterations"] = benchmark::Counter(iterations, benchmark::Counter::kAvgIterations);
 }
 BENCHMARK(BM_OdometryScan)->Unit(benchmark::kMillisecond)->MinTime(3.0);
 
