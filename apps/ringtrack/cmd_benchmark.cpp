@@ -55,6 +55,7 @@ struct BenchmarkOptions {
   std::string sensors{"both"};
   bool no_plot{false};
   bool no_deskew{false};
+  bool odometry{false};  // poses from the odometry, not the simulator
   bool quiet{false};
   bool save_tracks{false};
   bool person_figures{false};  // also the person-mode table (standing people count)
@@ -119,7 +120,8 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
      << ", "
      << (o.config.file.empty() && o.config.overrides.empty() ? "default configuration"
                                                              : "configuration: see config.yaml")
-     << (o.no_deskew ? ", moving-sensor scans not motion-compensated" : "") << "\n";
+     << (o.no_deskew ? ", moving-sensor scans not motion-compensated" : "")
+     << (o.odometry ? ", poses estimated by the odometry from the scans (--odometry)" : "") << "\n";
   md << "- wall time " << fixed(wall_s, 1) << " s (simulation + pipeline + evaluation)\n\n";
 
   md << "## Accuracy (as the paper's Table II)\n\n";
@@ -259,7 +261,9 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
                     const std::vector<experiment::PlannedRun>& runs, io::RunStatus& status);
 
 void run_benchmark(const BenchmarkOptions& o) {
-  const core::Config config = o.config.load();
+  core::Config config = o.config.load();
+  // As `run`: with the odometry, --no-deskew leaves the scans uncompensated there too.
+  if (o.odometry && o.no_deskew) config.odometry.deskew = false;
   core::validate_config(config);
   experiment::PlanOptions plan;
   plan.builtins = o.scenarios;
@@ -407,6 +411,7 @@ void benchmark_into(const BenchmarkOptions& o, const core::Config& config,
   experiment::BenchmarkCaseOptions case_options;
   case_options.seed = o.seed;
   case_options.deskew = !o.no_deskew;
+  case_options.odometry = o.odometry;
   case_options.evaluation.moving_radius_m = o.moving_radius_m;
   case_options.person_figures = o.person_figures;
   case_options.interrupt = &StopSignals::stop_flag();
@@ -480,6 +485,10 @@ void register_benchmark(CLI::App& app) {
   cmd->add_flag("--no-plot", o->no_plot, "do not draw stage_times.png");
   cmd->add_flag("--no-deskew", o->no_deskew,
                 "give moving-sensor scans to the pipeline without motion compensation");
+  cmd->add_flag("--odometry", o->odometry,
+                "estimate the sensor poses from the scans (docs/odometry.md), as `run` does for a "
+                "recording without poses, instead of taking the simulator's; the odometry starts "
+                "at the true pose of the first scan and compensates the scans itself");
   cmd->add_flag("--save-tracks", o->save_tracks,
                 "also write tracks-<N>-<sensor>.csv and objects-<N>-<sensor>.csv per run");
   cmd->add_option("--moving-radius", o->moving_radius_m,

@@ -5,6 +5,7 @@
 #include <deque>
 #include <map>
 #include <set>
+#include <stdexcept>
 
 #include "ringtrack/eval/statistics.hpp"
 #include "ringtrack/pipeline/deskew.hpp"
@@ -130,7 +131,9 @@ BenchmarkCase run_case(const sim::Scenario& scenario, const core::SensorModel& m
     const auto t1 = Clock::now();
     recorder.add_truth(k, scan);
     const auto t2 = Clock::now();
-    const auto& result = pipeline.process(scan.scan, pose);
+    if (options.odometry && k == 0) pipeline.set_odometry_start(pose);
+    const auto& result = options.odometry ? pipeline.process_with_odometry(scan.scan)
+                                          : pipeline.process(scan.scan, pose);
     const auto t3 = Clock::now();
     if (options.on_scan) options.on_scan(scan, result);
     recorder.add_result(k, result, out.times);
@@ -190,7 +193,8 @@ core::Pose next_simulated_scan(sim::Simulator& simulator, sim::SimulatedScan& sc
 BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Config& config,
                                  const BenchmarkCaseOptions& options) {
   sim::Simulator simulator(scenario, options.seed);
-  const bool deskew = scenario.sensor.motion != sim::SensorMotion::kStatic && options.deskew;
+  const bool deskew =
+      scenario.sensor.motion != sim::SensorMotion::kStatic && options.deskew && !options.odometry;
   const ScanFeed feed = [&](std::int64_t, sim::SimulatedScan& scan, core::Pose& pose) {
     pose = next_simulated_scan(simulator, scan, deskew);
   };
@@ -199,6 +203,11 @@ BenchmarkCase run_benchmark_case(const sim::Scenario& scenario, const core::Conf
 
 BenchmarkCase run_benchmark_case(const RecordedScenario& recorded, const core::Config& config,
                                  const BenchmarkCaseOptions& options) {
+  if (options.odometry && recorded.deskew() && recorded.moving()) {
+    throw std::invalid_argument(
+        "benchmark case: the odometry needs the scans as measured, and this recording of '" +
+        recorded.scenario().name + "' was deskewed with the true poses");
+  }
   const ScanFeed feed = [&](std::int64_t k, sim::SimulatedScan& scan, core::Pose& pose) {
     recorded.expand(static_cast<std::size_t>(k), scan, pose);
   };
@@ -208,6 +217,10 @@ BenchmarkCase run_benchmark_case(const RecordedScenario& recorded, const core::C
 
 BenchmarkCase run_benchmark_case(const RecordedSequence& recorded, const core::Config& config,
                                  const BenchmarkCaseOptions& options) {
+  if (options.odometry) {
+    throw std::invalid_argument("benchmark case: the odometry is not supported on sequence '" +
+                                recorded.name() + "' (its scans are read deskewed)");
+  }
   BenchmarkCase out;
   out.name = recorded.name();
   out.moving = recorded.moving();

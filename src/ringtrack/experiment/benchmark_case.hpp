@@ -39,8 +39,13 @@ const std::vector<std::pair<const char*, std::vector<double> StageSeries::*>>& s
 
 /// How one scenario run is done.
 struct BenchmarkCaseOptions {
-  std::uint64_t seed{1};                 ///< simulator seed (live runs; a recording has its own)
-  bool deskew{true};                     ///< motion-compensate moving-sensor scans (exact poses)
+  std::uint64_t seed{1};  ///< simulator seed (live runs; a recording has its own)
+  bool deskew{true};      ///< motion-compensate moving-sensor scans (exact poses)
+  /// The pipeline's odometry estimates the poses from the scans (as `run` does for a recording
+  /// without poses), starting at the simulator's pose of the first scan; the scans reach it as
+  /// measured, and it compensates them itself unless config.odometry.deskew is off. Live runs and
+  /// recordings made without deskew only.
+  bool odometry{false};
   eval::TrackingEvalOptions evaluation;  ///< paper mode, 0.5 m, class person
   /// Also evaluate the same tracks in person mode (person-flagged hypotheses, standing people
   /// included) into BenchmarkCase::person.
