@@ -249,7 +249,7 @@ def optimise(args, storage, folds, space, base_yaml, objectives, worker_index, b
             study.set_user_attr("settings", settings_of(args))
         if len(study.get_trials(deepcopy=False, states=states)) >= args.trials:
             continue
-        if base is not None:
+        if base:  # none when every key's base value lies outside the space
             study.enqueue_trial(base, user_attrs={"base": True}, skip_if_exists=True)
         objective = tuning.Objective(space, train, test, base_yaml, objectives, worker)
         study.optimize(objective, callbacks=[MaxTrialsCallback(args.trials, states=states),
