@@ -193,6 +193,15 @@ def test_sequence_folders_are_tuned_on(tmp_path, simulated_sequence):
     r = tune("--scenarios", "", "--sequences", tmp_path / "missing", "--out", out, "--quiet",
              check=False)
     assert r.returncode == 2 and "missing" in r.stderr
+    bare = tmp_path / "bare"  # a sequence without ground truth: one line, the study untouched
+    shutil.copytree(seq, bare)
+    (bare / "objects.csv").unlink()
+    r = tune("--scenarios", "", "--sequences", bare, "--trials", 3, "--out", out, "--quiet",
+             check=False)
+    assert r.returncode == 2 and "no objects.csv" in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    tune("--report", "--scenarios", "", "--sequences", seq, "--out", out, "--quiet")
+    assert len(trials(out / "trials.csv")) == 2
 
 
 def test_local_workers_share_one_study(tmp_path):

@@ -1,7 +1,6 @@
 #include "ringtrack/odometry/odometry.hpp"
 
 #include <algorithm>
-#include <cstdlib>
 #include <cmath>
 #include <numbers>
 #include <string>
@@ -397,12 +396,12 @@ void Odometry::commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, doub
 }
 
 bool Odometry::register_scan(const Eigen::Isometry3d& predicted, int max_iterations,
-                             OdometryResult& result, Eigen::Isometry3d& estimate, double coarse) {
+                             OdometryResult& result, Eigen::Isometry3d& estimate) {
   IcpSettings settings;
   settings.max_distance_m = correspondence_threshold();
   settings.kernel_scale_m = settings.max_distance_m / 3.0;
   settings.max_iterations = max_iterations;
-  settings.convergence = config_.convergence_m * coarse;
+  settings.convergence = config_.convergence_m;
   settings.point_to_plane = config_.residual == core::OdometryResidual::kPointToPlane;
   if (!neighbours_ready_ || neighbours_.max_distance_m() != settings.max_distance_m) {
     neighbours_.reset(map_, settings.max_distance_m, source_.size());
@@ -457,11 +456,7 @@ void Odometry::refine_passes(core::OrganizedScan& scan, double dt_s, bool conver
     OdometryResult again = result;
     again.iterations = 0;
     Eigen::Isometry3d refined = estimate;
-    static const int cap = std::getenv("RT_PASS_ITERS") ? std::atoi(std::getenv("RT_PASS_ITERS")) : 0;
-    static const double fac = std::getenv("RT_PASS_CONV") ? std::atof(std::getenv("RT_PASS_CONV")) : 1.0;
-    const bool last = pass == kMaxPasses - 1;
-    converged = register_scan(estimate, (!last && cap > 0) ? cap : config_.max_iterations, again, refined,
-                              last ? 1.0 : fac);
+    converged = register_scan(estimate, config_.max_iterations, again, refined);
     if (!again.registered) break;
     estimate = refined;
     result.iterations += again.iterations;

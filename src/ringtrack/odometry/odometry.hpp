@@ -103,7 +103,7 @@ class Odometry {
   void compute_normals(const core::OrganizedScan& scan);
   /// Runs ICP from the prediction; sets estimate when it registered; true when it converged.
   bool register_scan(const Eigen::Isometry3d& predicted, int max_iterations, OdometryResult& result,
-                     Eigen::Isometry3d& estimate, double coarse = 1.0);
+                     Eigen::Isometry3d& estimate);
   /// How far (m, at 20 m range) compensating with the estimate's motion instead of the predicted
   /// one moves points over a revolution.
   [[nodiscard]] double deskew_correction_m(const Eigen::Isometry3d& estimate) const;
