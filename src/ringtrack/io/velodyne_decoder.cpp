@@ -163,58 +163,58 @@ void VelodyneDecoder::check_stream(std::uint8_t product, std::uint8_t return_mod
   stream_known_ = true;
 }
 
-VelodynePacketStatus VelodyneDecoder::add_packet(std::span<const std::uint8_t> payload,
-                                                 std::int64_t host_stamp_ns) {
-  ++stats_.packets;
-  const VelodyneLayout layout = model_ ? layout_ : VelodyneLayout{};
-  VelodynePacketStatus status = parse_velodyne_packet(
-      payload, layout, nominal_advance_deg_ > 0 ? nominal_advance_deg_ : 0.2, parsed_);
+bool VelodyneDecoder::count_rejected(VelodynePacketStatus status) {
   switch (status) {
     case VelodynePacketStatus::kOk:
-      break;
+      return false;
     case VelodynePacketStatus::kWrongSize:
       ++stats_.wrong_size;
-      return status;
+      break;
     case VelodynePacketStatus::kBadBlockFlag:
       ++stats_.bad_block_flag;
-      return status;
+      break;
     case VelodynePacketStatus::kBadAzimuth:
     case VelodynePacketStatus::kDualPairMismatch:
       ++stats_.bad_azimuth;
-      return status;
+      break;
     case VelodynePacketStatus::kUnknownReturnMode:
       ++stats_.unknown_return_mode;
-      return status;
+      break;
     case VelodynePacketStatus::kProductChanged:
     case VelodynePacketStatus::kOutOfOrder:
-      return status;
+      break;
   }
+  return true;
+}
+
+bool VelodyneDecoder::stream_matches(std::span<const std::uint8_t> payload) {
   if (!stream_known_) {
     const bool had_model = model_.has_value();
     check_stream(parsed_.product, parsed_.return_mode);
     if (!had_model) {  // split again with the detected model's layout
       parse_velodyne_packet(payload, layout_, nominal_advance_deg_, parsed_);
     }
-  } else if (parsed_.product != product_ || parsed_.return_mode != return_mode_) {
+    return true;
+  }
+  if (parsed_.product != product_ || parsed_.return_mode != return_mode_) {
     ++stats_.product_changed;
-    return VelodynePacketStatus::kProductChanged;
+    return false;
   }
+  return true;
+}
 
-  const double sequence_us = model_->firing_sequence_us;
-  const double packet_start_us = parsed_.timestamp_us;
-  if (have_prev_) {
-    double dt = packet_start_us - prev_sensor_us_;
-    if (dt < -kHourUs / 2) dt += kHourUs;
-    if (dt > kHourUs / 2) dt -= kHourUs;
-    // A packet from before its predecessor (late or repeated) goes back in time and in azimuth;
-    // a stuck clock alone (zero time stamps) is no reason to drop a packet.
-    const double d_az = wrap360(parsed_.sequences[0].azimuth_deg - prev_azimuth_deg_);
-    if (dt < -0.5 * sequence_us && d_az > 180.0) {
-      ++stats_.out_of_order;
-      return VelodynePacketStatus::kOutOfOrder;
-    }
-  }
+bool VelodyneDecoder::goes_back(double packet_start_us) const {
+  if (!have_prev_) return false;
+  double dt = packet_start_us - prev_sensor_us_;
+  if (dt < -kHourUs / 2) dt += kHourUs;
+  if (dt > kHourUs / 2) dt -= kHourUs;
+  // A packet from before its predecessor (late or repeated) goes back in time and in azimuth;
+  // a stuck clock alone (zero time stamps) is no reason to drop a packet.
+  const double d_az = wrap360(parsed_.sequences[0].azimuth_deg - prev_azimuth_deg_);
+  return dt < -0.5 * model_->firing_sequence_us && d_az > 180.0;
+}
 
+void VelodyneDecoder::update_spacing() {
   // Running estimate of the azimuth advance per sequence over the packet's span.
   const int per_block = layout_.sequences_per_block;
   if (parsed_.count > per_block) {
@@ -232,7 +232,7 @@ VelodynePacketStatus VelodyneDecoder::add_packet(std::span<const std::uint8_t> p
   if (spacing_samples_ == 0) spacing_deg_ = nominal_advance_deg_;
   if (spacing_samples_ >= 50 &&
       std::abs(spacing_deg_ / nominal_advance_deg_ - 1.0) > options_.max_rate_deviation) {
-    const double rpm = spacing_deg_ / 360.0 / (sequence_us * 1e-6) * 60.0;
+    const double rpm = spacing_deg_ / 360.0 / (model_->firing_sequence_us * 1e-6) * 60.0;
     throw core::InputError(
         packet_label(stats_.packets) + ": the sensor spins at about " +
         std::to_string(static_cast<int>(std::lround(rpm))) + " rpm, but the scan rate is " +
@@ -240,22 +240,41 @@ VelodynePacketStatus VelodyneDecoder::add_packet(std::span<const std::uint8_t> p
         std::to_string(static_cast<int>(std::lround(options_.scan_rate_hz * 60))) +
         " rpm); set the scan rate to the sensor's");
   }
+}
 
-  std::int64_t packet_start_ns = 0;
+std::int64_t VelodyneDecoder::packet_start_ns(std::int64_t host_stamp_ns) const {
   if (options_.time_source == VelodyneTimeSource::kHost) {
     // The sensor sends a packet once its last firing sequence is over.
-    packet_start_ns = host_stamp_ns - std::llround(parsed_.packet_us * 1e3);
-  } else {
-    std::int64_t hour = host_stamp_ns - host_stamp_ns % kHourNs;
-    if (host_stamp_ns < 0) hour -= kHourNs;
-    packet_start_ns = hour + static_cast<std::int64_t>(parsed_.timestamp_us) * 1000;
-    if (packet_start_ns - host_stamp_ns > kHourNs / 2) packet_start_ns -= kHourNs;
-    if (host_stamp_ns - packet_start_ns > kHourNs / 2) packet_start_ns += kHourNs;
+    return host_stamp_ns - std::llround(parsed_.packet_us * 1e3);
   }
+  // The sensor's time is microseconds past the hour: the hour comes from the host's clock.
+  std::int64_t hour = host_stamp_ns - host_stamp_ns % kHourNs;
+  if (host_stamp_ns < 0) hour -= kHourNs;
+  std::int64_t start_ns = hour + static_cast<std::int64_t>(parsed_.timestamp_us) * 1000;
+  if (start_ns - host_stamp_ns > kHourNs / 2) start_ns -= kHourNs;
+  if (host_stamp_ns - start_ns > kHourNs / 2) start_ns += kHourNs;
+  return start_ns;
+}
+
+VelodynePacketStatus VelodyneDecoder::add_packet(std::span<const std::uint8_t> payload,
+                                                 std::int64_t host_stamp_ns) {
+  ++stats_.packets;
+  const VelodyneLayout layout = model_ ? layout_ : VelodyneLayout{};
+  const VelodynePacketStatus status = parse_velodyne_packet(
+      payload, layout, nominal_advance_deg_ > 0 ? nominal_advance_deg_ : 0.2, parsed_);
+  if (count_rejected(status)) return status;
+  if (!stream_matches(payload)) return VelodynePacketStatus::kProductChanged;
+  const double packet_start_us = parsed_.timestamp_us;
+  if (goes_back(packet_start_us)) {
+    ++stats_.out_of_order;
+    return VelodynePacketStatus::kOutOfOrder;
+  }
+  update_spacing();
+  const std::int64_t start_ns = packet_start_ns(host_stamp_ns);
   for (int i = 0; i < parsed_.count; ++i) {
     const VelodyneSequence& seq = parsed_.sequences[static_cast<std::size_t>(i)];
     add_sequence(seq, packet_start_us + seq.time_offset_us,
-                 packet_start_ns + std::llround(seq.time_offset_us * 1e3));
+                 start_ns + std::llround(seq.time_offset_us * 1e3));
   }
   ++stats_.decoded_packets;
   return VelodynePacketStatus::kOk;

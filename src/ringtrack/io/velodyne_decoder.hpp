@@ -104,6 +104,15 @@ class VelodyneDecoder {
  private:
   void set_model(core::SensorModel model);
   void check_stream(std::uint8_t product, std::uint8_t return_mode);
+  // The steps of add_packet on the packet in parsed_: counts a rejected parse (true when
+  // rejected); checks the product and return mode against the stream's (false on a change);
+  // whether it goes back in time and azimuth; the running azimuth advance (throws on a wrong
+  // rotation rate); its first firing's time in ns.
+  bool count_rejected(VelodynePacketStatus status);
+  bool stream_matches(std::span<const std::uint8_t> payload);
+  [[nodiscard]] bool goes_back(double packet_start_us) const;
+  void update_spacing();
+  [[nodiscard]] std::int64_t packet_start_ns(std::int64_t host_stamp_ns) const;
   void add_sequence(const VelodyneSequence& seq, double sensor_us, std::int64_t stamp_ns);
   void start_scan(double rel_deg, const VelodyneSequence& seq, std::int64_t stamp_ns);
   void fill_column(int column, const VelodyneSequence& seq, std::int64_t stamp_ns);
