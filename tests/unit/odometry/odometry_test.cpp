@@ -629,6 +629,40 @@ TEST(Odometry, InconsistentRangesAreAConfigError) {
   EXPECT_THROW(odometry::Odometry{c}, core::ConfigError);
 }
 
+// Past the first 30 scans the passes that another follows stop after two iterations (the
+// speed of docs/odometry.md): 10 s of the turning figure 8 stay within centimetres, the capped
+// scans as well as the first ones, and the capped scans take fewer iterations.
+TEST(Odometry, TurningFlightStaysWithinCentimetresWhenThePassesAreCapped) {
+  sim::Scenario scenario = sim::with_moving_sensor(sim::builtin_scenario("4"));
+  scenario.duration_s = 10.0;
+  sim::Simulator simulator(scenario, 3);
+  sim::SimulatedScan scan;
+  simulator.next(scan);
+  odometry::Odometry odo(core::OdometryConfig{}, scan.pose.isometry());
+  double early_sse = 0.0, late_sse = 0.0;
+  double early_iterations = 0.0, late_iterations = 0.0;
+  int early = 0, late = 0;
+  for (int k = 0;; ++k) {
+    const auto r = odo.process(scan.scan);
+    const double error = (r.pose.translation - scan.pose.translation).norm();
+    if (k > 0 && k < 30) {
+      early_sse += error * error;
+      early_iterations += r.iterations;
+      ++early;
+    } else if (k >= 30) {
+      late_sse += error * error;
+      late_iterations += r.iterations;
+      ++late;
+    }
+    if (simulator.next_index() >= simulator.scan_count()) break;
+    simulator.next(scan);
+  }
+  ASSERT_EQ(late, 70);
+  EXPECT_LT(std::sqrt(early_sse / early), 0.1);  // the young map: 0.057 m when written
+  EXPECT_LT(std::sqrt(late_sse / late), 0.06);   // capped: 0.040 m when written
+  EXPECT_LT(late_iterations / late, early_iterations / early);
+}
+
 // The moving-sensor scenarios of docs/odometry.md load, validate (paths clear of every solid)
 // and last 100 s with a scripted sensor.
 TEST(OdometryScenarios, FilesLoadWithAScriptedSensorFor100Seconds) {
