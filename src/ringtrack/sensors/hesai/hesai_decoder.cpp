@@ -132,6 +132,82 @@ void HesaiDecoder::set_format(const HesaiFormat& format) {
   }
 }
 
+void HesaiDecoder::check_same_format(std::span<const std::uint8_t> payload) const {
+  // A packet that does not parse as the stream's format may be another model's: say so.
+  const HesaiFormat* other = identify_hesai_packet(payload);
+  if (other != nullptr && other != format_) {
+    throw core::InputError(packet_label(stats_.packets) + ": a " + other->name +
+                           " packet, but the stream is " + format_->name +
+                           (options_.model.empty() ? "" : " (named)"));
+  }
+}
+
+bool HesaiDecoder::count_rejected(HesaiPacketStatus status) {
+  switch (status) {
+    case HesaiPacketStatus::kOk:
+      return false;
+    case HesaiPacketStatus::kWrongSize:
+      ++stats_.wrong_size;
+      break;
+    case HesaiPacketStatus::kBadHeader:
+    case HesaiPacketStatus::kBadDistanceUnit:
+      ++stats_.bad_header;
+      break;
+    case HesaiPacketStatus::kBadAzimuth:
+      ++stats_.bad_azimuth;
+      break;
+    case HesaiPacketStatus::kUnknownReturnMode:
+      ++stats_.unknown_return_mode;
+      break;
+  }
+  return true;
+}
+
+void HesaiDecoder::choose_return(std::uint8_t mode, bool dual) {
+  switch (options_.return_selection) {
+    case HesaiReturnSelection::kAuto:
+      use_last_ = dual && mode == 0x3B;  // last + first: no strongest in the pair
+      break;
+    case HesaiReturnSelection::kStrongest:
+      if (mode == 0x38 || mode == 0x33 || mode == 0x3B) {
+        throw core::InputError(packet_label(stats_.packets) +
+                               ": the stream carries no strongest return (return mode " +
+                               std::to_string(mode) + ")");
+      }
+      use_last_ = false;
+      break;
+    case HesaiReturnSelection::kLast:
+      if (mode != 0x38 && mode != 0x39 && mode != 0x3B) {
+        throw core::InputError(packet_label(stats_.packets) +
+                               ": the stream carries no last return (return mode " +
+                               std::to_string(mode) + ")");
+      }
+      use_last_ = true;
+      break;
+  }
+}
+
+bool HesaiDecoder::stream_matches(const HesaiFormat& format) {
+  if (format_ == nullptr) {
+    try {
+      set_format(format);
+    } catch (const core::InputError& e) {
+      throw core::InputError(packet_label(stats_.packets) + " (" + format.name + "): " + e.what());
+    }
+  }
+  if (!stream_known_) {
+    choose_return(parsed_.return_mode, parsed_.dual);
+    return_mode_ = parsed_.return_mode;
+    stream_known_ = true;
+    return true;
+  }
+  if (parsed_.return_mode != return_mode_) {
+    ++stats_.mode_changed;
+    return false;
+  }
+  return true;
+}
+
 HesaiPacketStatus HesaiDecoder::add_packet(std::span<const std::uint8_t> payload,
                                            std::int64_t host_stamp_ns) {
   ++stats_.packets;
@@ -140,70 +216,10 @@ HesaiPacketStatus HesaiDecoder::add_packet(std::span<const std::uint8_t> payload
     ++stats_.wrong_size;
     return HesaiPacketStatus::kWrongSize;
   }
-  HesaiPacketStatus status = parse_hesai_packet(payload, *format, parsed_);
-  if (status != HesaiPacketStatus::kOk && format_ != nullptr) {
-    const HesaiFormat* other = identify_hesai_packet(payload);
-    if (other != nullptr && other != format_) {
-      throw core::InputError(packet_label(stats_.packets) + ": a " + other->name +
-                             " packet, but the stream is " + format_->name +
-                             (options_.model.empty() ? "" : " (named)"));
-    }
-  }
-  switch (status) {
-    case HesaiPacketStatus::kOk:
-      break;
-    case HesaiPacketStatus::kWrongSize:
-      ++stats_.wrong_size;
-      return status;
-    case HesaiPacketStatus::kBadHeader:
-    case HesaiPacketStatus::kBadDistanceUnit:
-      ++stats_.bad_header;
-      return status;
-    case HesaiPacketStatus::kBadAzimuth:
-      ++stats_.bad_azimuth;
-      return status;
-    case HesaiPacketStatus::kUnknownReturnMode:
-      ++stats_.unknown_return_mode;
-      return status;
-  }
-  if (format_ == nullptr) {
-    try {
-      set_format(*format);
-    } catch (const core::InputError& e) {
-      throw core::InputError(packet_label(stats_.packets) + " (" + format->name + "): " + e.what());
-    }
-  }
-  if (!stream_known_) {
-    const std::uint8_t mode = parsed_.return_mode;
-    const bool dual = parsed_.dual;
-    switch (options_.return_selection) {
-      case HesaiReturnSelection::kAuto:
-        use_last_ = dual && mode == 0x3B;  // last + first: no strongest in the pair
-        break;
-      case HesaiReturnSelection::kStrongest:
-        if (mode == 0x38 || mode == 0x33 || mode == 0x3B) {
-          throw core::InputError(packet_label(stats_.packets) +
-                                 ": the stream carries no strongest return (return mode " +
-                                 std::to_string(mode) + ")");
-        }
-        use_last_ = false;
-        break;
-      case HesaiReturnSelection::kLast:
-        if (mode != 0x38 && mode != 0x39 && mode != 0x3B) {
-          throw core::InputError(packet_label(stats_.packets) +
-                                 ": the stream carries no last return (return mode " +
-                                 std::to_string(mode) + ")");
-        }
-        use_last_ = true;
-        break;
-    }
-    return_mode_ = mode;
-    stream_known_ = true;
-  } else if (parsed_.return_mode != return_mode_) {
-    ++stats_.mode_changed;
-    return HesaiPacketStatus::kUnknownReturnMode;
-  }
-
+  const HesaiPacketStatus status = parse_hesai_packet(payload, *format, parsed_);
+  if (status != HesaiPacketStatus::kOk && format_ != nullptr) check_same_format(payload);
+  if (count_rejected(status)) return status;
+  if (!stream_matches(*format)) return HesaiPacketStatus::kUnknownReturnMode;
   const int firings = parsed_.dual ? parsed_.blocks / 2 : parsed_.blocks;
   // The packet leaves the sensor after its last firing.
   const std::int64_t start_ns = host_stamp_ns - std::llround(firings * firing_us_ * 1e3);

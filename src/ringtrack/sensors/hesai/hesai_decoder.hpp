@@ -105,6 +105,13 @@ class HesaiDecoder {
 
  private:
   void set_format(const HesaiFormat& format);
+  // The steps of add_packet: a packet that fails to parse as the stream's format but is another
+  // model's is an error; a rejected parse is counted (true); the first packet fixes the format
+  // and the return taken (choose_return), and a later change of return mode is counted (false).
+  void check_same_format(std::span<const std::uint8_t> payload) const;
+  bool count_rejected(HesaiPacketStatus status);
+  void choose_return(std::uint8_t mode, bool dual);
+  bool stream_matches(const HesaiFormat& format);
   void add_firing(int block, std::int64_t stamp_ns);
   void start_scan(double rel_deg, int block, std::int64_t stamp_ns);
   void fill_column(int column, int block, std::int64_t stamp_ns);
