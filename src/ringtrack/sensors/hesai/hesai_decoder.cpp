@@ -293,7 +293,7 @@ void HesaiDecoder::fill_column(int column, int block, std::int64_t stamp_ns) {
   const HesaiFormat& f = *format_;
   const std::uint8_t* first = parsed_.records[static_cast<std::size_t>(block)];
   const std::uint8_t* second =
-      parsed_.dual ? parsed_.records[static_cast<std::size_t>(block + 1)] : nullptr;
+      parsed_.dual ? parsed_.records[static_cast<std::size_t>(block) + 1] : nullptr;
   const double unit = parsed_.distance_unit_m;
   // Point azimuth = block azimuth + channel offset (clockwise); ringtrack's is its negative, so
   // x = h cos(block + offset), y = -h sin(block + offset), by the angle-addition formulas.
