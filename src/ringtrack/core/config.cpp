@@ -434,6 +434,20 @@ class Schema {
     integer("free_space_protect_count", m.free_space_protect_count, 1, 1000000,
             "free_space: a point whose static-map voxel already holds this many points is "
             "structure seen occupied many times and stays");
+    integer("transient_scans", m.transient_scans, 0, 1000,
+            "transient line: a segmented point at least transient_min_height_m above the ground "
+            "leaves its scan unless a scan this many scans or more before or after it (among "
+            "the last minute's and the log's) segmented a point near it, or its static-map voxel "
+            "holds free_space_protect_count points: a walker too far or too sparse to be "
+            "tracked is seen once at each place, what stands is seen again; judged when the "
+            "scan leaves the log, so later scans count up to log_delay_scans; 0 = off");
+    number("transient_cell_m", m.transient_cell_m, 0.01, 10.0,
+           "transient line: near = in the same horizontal cell of this edge or one of the eight "
+           "around it (m)");
+    number("transient_min_height_m", m.transient_min_height_m, 0.0, 10.0,
+           "transient line: points lower than this above the ground (the run's start altitude "
+           "minus detection.sensor_height_m) are never transient: ground that a tilted "
+           "sensor's rings segment (m)");
     number("map_radius_m", m.map_radius_m, 0.0, 1e6,
            "bounded memory: static-map voxels farther than this (horizontally) from the sensor "
            "leave memory (a sweep checks every voxel within 10 scans); run writes them into "

@@ -163,6 +163,11 @@ struct MappingConfig {
   int free_space_lag_scans{5};         // first test this many scans later; again at release
   double free_space_reach_m{0.8};      // points this near a hypothesis' box are candidates
   int free_space_protect_count{10};    // a map voxel of this many points protects its points
+  // Transient line (docs/tracking.md): a segmented point this far above the ground that no scan
+  // transient_scans or more before or after its own segmented again near it leaves its scan.
+  int transient_scans{20};              // 0 = off
+  double transient_cell_m{0.15};        // "near": the point's x-y cell of this edge or the 8 around
+  double transient_min_height_m{0.15};  // lower points (the ground) never count as transient
   double map_radius_m{0.0};  // voxels farther from the sensor (x-y) leave memory (0 = keep all)
 };
 

@@ -125,7 +125,9 @@ float LoggedScan::lowest_in(const core::Box3& box) const {
 }
 
 DynamicObjectFilter::DynamicObjectFilter(const core::MappingConfig& config)
-    : config_(config), map_(config.voxel_size_m) {}
+    : config_(config),
+      map_(config.voxel_size_m),
+      transient_grid_(config.transient_cell_m, kTransientMemoryScans) {}
 
 core::Box3 DynamicObjectFilter::inflate(const core::Box3& box) const {
   const auto m = static_cast<float>(config_.box_margin_m);
@@ -212,6 +214,7 @@ void DynamicObjectFilter::reach_ground(const LoggedScan& scan, core::Box3& grown
 
 void DynamicObjectFilter::release_front() {
   LoggedScan& scan = log_.front();
+  remove_transient(scan);
   map_.insert(scan.points, scan.intensities, scan.removed, scan.cells, settled_);
   released_.push_back(std::move(scan));
   log_.pop_front();
@@ -241,6 +244,8 @@ LoggedScan& DynamicObjectFilter::log_scan(const core::OrganizedScan& scan, const
   logged.removed_count = 0;
   logged.candidates.clear();
   logged.candidate_ranges.clear();
+  logged.transient_candidates.clear();
+  logged.transient_keys.clear();
   const Eigen::Isometry3d world_from_sensor = pose.isometry();
   const Eigen::Matrix3f rotation = world_from_sensor.linear().cast<float>();
   const Eigen::Vector3f translation = world_from_sensor.translation().cast<float>();
@@ -357,6 +362,7 @@ const FilterResult& DynamicObjectFilter::process(
   evicted_.clear();
   LoggedScan& current = log_scan(scan, pose, sequence);
   for (const auto& h : hypotheses) update_object(h, detections, current, sequence);
+  if (evidence.segments != nullptr) note_transient_candidates(current, *evidence.segments);
   // Forget deleted hypotheses.
   std::erase_if(objects_, [&](const auto& entry) { return entry.second.touched != sequence; });
 
@@ -468,6 +474,41 @@ void DynamicObjectFilter::clear_seen_through(LoggedScan& logged,
     logged.removed[i] = 1;
     ++logged.removed_count;
     ++result_.free_space_points;
+  }
+}
+
+void DynamicObjectFilter::note_transient_candidates(LoggedScan& logged,
+                                                    const std::vector<std::uint8_t>& segments) {
+  if (config_.transient_scans <= 0 || !ground_z_m_) return;
+  const auto min_z = static_cast<float>(*ground_z_m_ + config_.transient_min_height_m);
+  for (std::size_t i = 0; i < logged.points.size(); ++i) {
+    // Points a track already removed are not noted: a walker's place confirms no later walker.
+    if (segments[logged.cells[i]] == 0 || logged.removed[i] != 0) continue;
+    if (!(logged.points[i].z() >= min_z)) continue;
+    logged.transient_candidates.push_back(static_cast<std::uint32_t>(i));
+    // The key now, while the point is in cache: the scan is judged 50 scans later.
+    logged.transient_keys.push_back(transient_grid_.key(logged.points[i]));
+  }
+  transient_grid_.note(logged.transient_keys, logged.sequence);
+}
+
+void DynamicObjectFilter::remove_transient(LoggedScan& scan) {
+  const auto k = static_cast<std::uint64_t>(std::max(0, config_.transient_scans));
+  // Judged only with k later scans logged: the end of a run (flush) leaves its last scans alone,
+  // as does a log shorter than k.
+  if (k == 0 || next_sequence_ < scan.sequence + k + 1) return;
+  const auto protect = static_cast<std::uint32_t>(config_.free_space_protect_count);
+  transient_out_.clear();
+  transient_grid_.unconfirmed(scan.transient_keys, scan.sequence, k, transient_out_);
+  for (const std::uint32_t j : transient_out_) {
+    const std::uint32_t i = scan.transient_candidates[j];
+    if (scan.removed[i] != 0) continue;
+    // Structure the map holds many points of stays (a post seen long ago, then not segmented).
+    const MapPoint* voxel = map_.voxel_at(scan.points[i]);
+    if (voxel != nullptr && voxel->count >= protect) continue;
+    scan.removed[i] = 1;
+    ++scan.removed_count;
+    ++result_.transient_points;
   }
 }
 

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -17,6 +18,7 @@
 #include "ringtrack/core/pose.hpp"
 #include "ringtrack/core/visibility.hpp"
 #include "ringtrack/mapping/static_map.hpp"
+#include "ringtrack/mapping/transient_grid.hpp"
 #include "ringtrack/tracking/tracker.hpp"
 
 namespace ringtrack::mapping {
@@ -36,6 +38,9 @@ struct LoggedScan {
   /// Points the free-space line tests against later scans (segmented or near a hypothesis).
   std::vector<std::uint32_t> candidates;
   std::vector<float> candidate_ranges;  ///< each candidate's measured range (m)
+  /// Points the transient line judges when the scan leaves the log (segmented, above the ground).
+  std::vector<std::uint32_t> transient_candidates;
+  std::vector<std::uint64_t> transient_keys;  ///< their TransientGrid cells
   /// Bounds of the finite points [kBlockPoints * b, kBlockPoints * (b + 1)): consecutive points
   /// lie along a ring, so a box meets few blocks (empty when not computed).
   std::vector<core::Box3> block_bounds;
@@ -73,6 +78,8 @@ struct FilterResult {
   std::size_t free_space_points{0};
   /// Points this scan saw through that stayed: their voxel is structure seen many times.
   std::size_t free_space_protected{0};
+  /// Points of the scan that left the log removed as transient (transient line).
+  std::size_t transient_points{0};
   /// Voxels that left the map for lying beyond mapping.map_radius_m of the sensor (evicted()).
   std::size_t map_voxels_evicted{0};
 };
@@ -99,6 +106,10 @@ class DynamicObjectFilter {
                               const std::vector<core::Detection>& detections,
                               const std::vector<tracking::Hypothesis>& hypotheses,
                               const ScanEvidence& evidence = {});
+  /// The ground's height in the world frame, which the transient line needs (until it is set
+  /// the line is off): points less than mapping.transient_min_height_m above it are never
+  /// transient.
+  void set_ground_z(double z_m) { ground_z_m_ = z_m; }
   /// Moves every logged scan into the map (end of a run).
   const FilterResult& flush();
 
@@ -113,6 +124,9 @@ class DynamicObjectFilter {
   static constexpr std::size_t kSweepScans = 10;
   /// ... and each scan checks at least this many (a small map is swept in one scan).
   static constexpr std::size_t kMinSweepVisits = 4096;
+  /// The transient line remembers where points were segmented for at least this many scans
+  /// (a minute at 10 Hz): what stood there that long ago still confirms a point.
+  static constexpr std::uint64_t kTransientMemoryScans = 600;
 
   /// Map voxels that left memory in the last process() call for lying farther than
   /// mapping.map_radius_m from the sensor, e.g. to write them out; final (no later removal
@@ -171,6 +185,12 @@ class DynamicObjectFilter {
   void mark_candidates(LoggedScan& logged, const core::OrganizedScan& scan,
                        const std::vector<std::uint8_t>* segments,
                        const std::vector<tracking::Hypothesis>& hypotheses);
+  // Notes the segmented points of the scan just logged that stand above the ground in the
+  // transient grid and keeps them as the scan's transient candidates.
+  void note_transient_candidates(LoggedScan& logged, const std::vector<std::uint8_t>& segments);
+  // Removes the transient candidates of a scan about to leave the log that no scan
+  // transient_scans or more away from it saw again (transient line).
+  void remove_transient(LoggedScan& scan);
   // Removes the candidates of a logged scan that the newest scan (seen through the visibility
   // query, taken at pose) sees through; from another viewpoint only when moved_too.
   void clear_seen_through(LoggedScan& logged, const core::VisibilityQuery& visibility,
@@ -187,6 +207,9 @@ class DynamicObjectFilter {
   std::vector<core::Box3> near_boxes_;         // free-space candidates: around these boxes
   std::vector<const core::Box3*> near_block_;  // ... those that meet the block at hand
   std::unordered_map<std::uint64_t, ObjectHistory> objects_;
+  TransientGrid transient_grid_;
+  std::vector<std::uint32_t> transient_out_;  // remove_transient's unconfirmed candidates
+  std::optional<double> ground_z_m_;          // the transient line's ground (set_ground_z)
   std::uint64_t next_sequence_{0};
   FilterResult result_;
 };

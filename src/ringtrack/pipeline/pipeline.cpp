@@ -63,6 +63,7 @@ core::Pose Pipeline::to_local(const core::Pose& world) {
     ground_z_ = world.translation.z() - origin_.z() - config_.detection.sensor_height_m;
     detector_.set_ground_z(ground_z_);
     recent_views_.set_ground_z(ground_z_);
+    filter_.set_ground_z(ground_z_);
     framed_ = true;
   }
   core::Pose local = world;
