@@ -612,6 +612,71 @@ TEST(DynamicObjectFilter, OuterMarginTakesTheWalkerNotTheWallBesideIt) {
   EXPECT_GT(unprotected.walls_removed, 10u) << "without the map's protection the wall goes";
 }
 
+// The transient line (mapping.transient_scans): a walker nothing detects (too far, too sparse
+// to track) whose cells the segmentation marks, beside a post it marks too, seen by a resting
+// sensor for 100 scans. Returns the points of each left in the map above the feet, and the
+// points the line removed.
+struct TransientRun {
+  int walker_kept{0};
+  int post_kept{0};
+  std::size_t removed{0};
+};
+
+TransientRun transient_run(const core::MappingConfig& mapping, bool ground_known) {
+  DynamicObjectFilter filter(mapping);
+  if (ground_known) filter.set_ground_z(kGroundZ);
+  TransientRun out;
+  constexpr int kScans = 100;
+  for (int k = 0; k < kScans; ++k) {
+    const Person walker{-4.0 + 0.1 * k, 5.0, 1};  // 1 m/s
+    const Person post{-3.0, -5.0, 2};
+    const Frame f = render({walker, post}, sensor_pose(k));
+    std::vector<std::uint8_t> segments(f.labels.size());
+    for (std::size_t i = 0; i < segments.size(); ++i) segments[i] = f.labels[i] != 0 ? 1 : 0;
+    out.removed += filter.process(f.scan, f.pose, {}, {}, {nullptr, &segments}).transient_points;
+  }
+  out.removed += filter.flush().transient_points;
+  // Above the feet (ring 0 lies on the ground) and along the path of the scans judged: the last
+  // transient_scans scans have too few later ones and are left alone.
+  const auto above_feet = [](const MapPoint& p) { return p.position.z() > kGroundZ + 0.2; };
+  const double judged_x = -4.0 + 0.1 * (kScans - 1 - mapping.transient_scans) - kPersonRadius;
+  filter.map().for_each([&](const MapPoint& p) {
+    if (!above_feet(p)) return;
+    // (The wall crosses y = 5 at x = -8.66, left of where the walker starts.)
+    if (std::abs(p.position.y() - 5.0) < kPersonRadius + 0.05 &&
+        p.position.x() > -4.0 - kPersonRadius - 0.05 && p.position.x() < judged_x) {
+      ++out.walker_kept;
+    }
+    if (std::hypot(p.position.x() + 3.0, p.position.y() + 5.0) < kPersonRadius + 0.05) {
+      ++out.post_kept;
+    }
+  });
+  return out;
+}
+
+TEST(DynamicObjectFilter, TransientLineTakesAnUntrackedWalkerNotAPost) {
+  core::MappingConfig off;
+  off.transient_scans = 0;
+  const TransientRun before = transient_run(off, true);
+  ASSERT_GT(before.walker_kept, 100) << "without the line the walker stays in the map";
+  EXPECT_EQ(before.removed, 0u);
+
+  const core::MappingConfig defaults;
+  ASSERT_EQ(defaults.transient_scans, 20);
+  const TransientRun on = transient_run(defaults, true);
+  EXPECT_EQ(on.walker_kept, 0);
+  EXPECT_GT(on.removed, 500u);
+  EXPECT_GT(on.post_kept, 10) << "what stands is segmented again and stays";
+  EXPECT_EQ(on.post_kept, before.post_kept);
+
+  // The ground decides what may be transient: without it the line is off, and points below
+  // transient_min_height_m above it never count.
+  EXPECT_EQ(transient_run(defaults, false).removed, 0u);
+  core::MappingConfig high = defaults;
+  high.transient_min_height_m = kPersonHeight + 0.1;
+  EXPECT_EQ(transient_run(high, true).removed, 0u);
+}
+
 // lowest_in against a direct scan of the points, with and without the block bounds.
 TEST(LoggedScan, LowestInMatchesADirectScan) {
   LoggedScan scan;
