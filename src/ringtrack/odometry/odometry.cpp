@@ -442,7 +442,8 @@ Eigen::Isometry3d Odometry::forward_motion(const Eigen::Isometry3d& implied, dou
   // fixed during a scan's passes, so the passes' fixed point stays as stable as before.
   const double share = config_.deskew_acceleration;
   if (!(share > 0) || !change_known_ || !(motion_dt_s_ > 0)) return implied;
-  const double ratio = dt_s / motion_dt_s_;  // the change is a rate difference times a time
+  // Over an interval the change grows with the square of its length (acceleration x time^2).
+  const double ratio = dt_s / motion_dt_s_;
   return implied * scale_motion(change_, share * ratio * ratio);
 }
 
@@ -454,7 +455,8 @@ double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate, double d
 
 void Odometry::refine_deskew(const Eigen::Isometry3d& estimate, double dt_s) {
   // The motion the scan was compensated with (over this scan's interval) and the one its
-  // estimate implies; the difference is applied on top.
+  // estimate implies (extrapolated over the scan's own revolution: forward_motion); the
+  // difference is applied on top.
   const Eigen::Isometry3d implied = last_pose_.inverse() * estimate;
   const Eigen::Isometry3d forward = forward_motion(implied, dt_s);
   const Eigen::Isometry3d correction = forward * applied_.inverse();

@@ -104,8 +104,8 @@ class Odometry {
   /// Runs ICP from the prediction; sets estimate when it registered; true when it converged.
   bool register_scan(const Eigen::Isometry3d& predicted, int max_iterations, OdometryResult& result,
                      Eigen::Isometry3d& estimate);
-  /// How far (m, at 20 m range) compensating with the estimate's motion instead of the predicted
-  /// one moves points over a revolution.
+  /// How far (m, at 20 m range) compensating with the estimate's motion (scan interval dt_s)
+  /// instead of the one applied moves points over a revolution.
   [[nodiscard]] double deskew_correction_m(const Eigen::Isometry3d& estimate, double dt_s) const;
   /// The motion over this scan's own revolution (after its stamp): the motion since the last
   /// scan (implied, over dt_s), extrapolated with config.deskew_acceleration times the change

