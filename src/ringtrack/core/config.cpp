@@ -535,6 +535,12 @@ class Schema {
            "the previous pose; points without a normal are left out)");
     boolean("deskew", o.deskew,
             "motion-compensate each scan with the estimated velocity, per column time");
+    number("deskew_acceleration", o.deskew_acceleration, 0.0, 1.0,
+           "share of the change between the last two scan-to-scan motions that is extrapolated "
+           "over a scan's own revolution when compensating it (its columns fire after its stamp, "
+           "the motion known is the one before): 0 assumes constant velocity; larger values "
+           "follow a changing turn rate (a banking MAV) more closely but amplify the estimates' "
+           "noise (1 ran away on a figure 8); docs/odometry.md");
     boolean("exclude_tracks", o.exclude_tracks,
             "points inside the boxes of the previous scan's reported tracks, predicted to this "
             "scan, stay out of registration and the local map (walkers do not drag the estimate)");

@@ -242,6 +242,8 @@ struct OdometryConfig {
                                                                // ground rings do not pull the
                                                                // estimate back to the last pose
   bool deskew{true};                  // motion-compensate each scan with the estimated velocity
+  double deskew_acceleration{0.3};    // share of the last change of the motion extrapolated over
+                                      // a scan's own revolution (0: constant velocity)
   bool exclude_tracks{true};          // points of tracked objects stay out of ICP and the map
   double exclude_margin_m{0.3};       // ... inside their predicted boxes grown by this
   double degeneracy_threshold{0.01};  // a scan whose weakest translation direction gets less than

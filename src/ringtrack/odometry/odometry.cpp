@@ -371,8 +371,17 @@ void Odometry::insert_pending(const Eigen::Isometry3d& actual, double actual_dt_
 
 void Odometry::commit(const Eigen::Isometry3d& pose, std::int64_t stamp_ns, double dt_s) {
   if (scans_ > 0) {
+    const Eigen::Isometry3d before = motion_;
+    const double before_dt_s = motion_dt_s_;
     motion_ = last_pose_.inverse() * pose;
     motion_dt_s_ = 1e-9 * static_cast<double>(stamp_ns - last_stamp_ns_);
+    // How the motion changed from one interval to the next (the acceleration): unknown after a
+    // velocity reset (the motion before is the assumed stop, not a measurement).
+    change_known_ = before_dt_s > 0 && !velocity_reset_;
+    if (change_known_) {
+      change_ = scale_motion(before, motion_dt_s_ / before_dt_s).inverse() * motion_;
+    }
+    velocity_reset_ = false;
   }
   insert_pending(motion_, motion_dt_s_);
   last_pose_ = pose;
@@ -422,17 +431,36 @@ bool Odometry::register_scan(const Eigen::Isometry3d& predicted, int max_iterati
   return icp.converged;
 }
 
-double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate) const {
-  const Eigen::Isometry3d change = (last_pose_.inverse() * estimate) * applied_.inverse();
+Eigen::Isometry3d Odometry::forward_motion(const Eigen::Isometry3d& implied, double dt_s) const {
+  // The columns fire after the stamp, during the interval to the *next* scan, but the motion
+  // known is the one since the last scan: on a platform whose turn rate changes (a MAV banking
+  // into a figure 8, 30 degrees/s within a second) it lags by a whole revolution, and the
+  // compensation error (tenths of a degree) biases the roll and pitch of every estimate and of
+  // the map (docs/odometry.md, "Tilt"). The change between the last two intervals, scaled by
+  // the configured share (a full one amplifies the estimates' noise until they run away),
+  // extrapolates the motion over the scan's own revolution. The change is one interval old and
+  // fixed during a scan's passes, so the passes' fixed point stays as stable as before.
+  const double share = config_.deskew_acceleration;
+  if (!(share > 0) || !change_known_ || !(motion_dt_s_ > 0)) return implied;
+  // Over an interval the change grows with the square of its length (acceleration x time^2).
+  const double ratio = dt_s / motion_dt_s_;
+  return implied * scale_motion(change_, share * ratio * ratio);
+}
+
+double Odometry::deskew_correction_m(const Eigen::Isometry3d& estimate, double dt_s) const {
+  const Eigen::Isometry3d change =
+      forward_motion(last_pose_.inverse() * estimate, dt_s) * applied_.inverse();
   return change.translation().norm() + kLeverM * Eigen::AngleAxisd(change.linear()).angle();
 }
 
 void Odometry::refine_deskew(const Eigen::Isometry3d& estimate, double dt_s) {
   // The motion the scan was compensated with (over this scan's interval) and the one its
-  // estimate implies; the difference is applied on top.
+  // estimate implies (extrapolated over the scan's own revolution: forward_motion); the
+  // difference is applied on top.
   const Eigen::Isometry3d implied = last_pose_.inverse() * estimate;
-  const Eigen::Isometry3d correction = implied * applied_.inverse();
-  applied_ = implied;
+  const Eigen::Isometry3d forward = forward_motion(implied, dt_s);
+  const Eigen::Isometry3d correction = forward * applied_.inverse();
+  applied_ = forward;
   // The selected points, to first order (the correction is small): cheaper than compensating
   // the whole scan again and selecting them anew (the scan itself is compensated once, after the
   // last pass).
@@ -455,7 +483,7 @@ void Odometry::refine_passes(core::OrganizedScan& scan, double dt_s, bool conver
   // turning MAV or a shaking hand.
   const Eigen::Isometry3d scan_applied = applied_;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
-    const bool changed = deskew_correction_m(estimate) > kSecondPassShiftM;
+    const bool changed = deskew_correction_m(estimate, dt_s) > kSecondPassShiftM;
     refine_deskew(estimate, dt_s);
     if (!changed && converged) break;
     OdometryResult again = result;
@@ -542,7 +570,11 @@ OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core
   commit(estimate, scan.stamp_ns, dt_s);
   // Where the scene does not fix the motion (a plain), the velocity learned from it would be
   // extrapolated scan after scan and run away: assume the sensor stops until geometry returns.
-  if (result.degenerate) motion_ = Eigen::Isometry3d::Identity();
+  if (result.degenerate) {
+    motion_ = Eigen::Isometry3d::Identity();
+    change_known_ = false;
+    velocity_reset_ = true;
+  }
   result.pose.stamp_ns = scan.stamp_ns;
   result.pose.translation = estimate.translation();
   result.pose.rotation = Eigen::Quaterniond(estimate.linear()).normalized();

@@ -104,9 +104,14 @@ class Odometry {
   /// Runs ICP from the prediction; sets estimate when it registered; true when it converged.
   bool register_scan(const Eigen::Isometry3d& predicted, int max_iterations, OdometryResult& result,
                      Eigen::Isometry3d& estimate);
-  /// How far (m, at 20 m range) compensating with the estimate's motion instead of the predicted
-  /// one moves points over a revolution.
-  [[nodiscard]] double deskew_correction_m(const Eigen::Isometry3d& estimate) const;
+  /// How far (m, at 20 m range) compensating with the estimate's motion (scan interval dt_s)
+  /// instead of the one applied moves points over a revolution.
+  [[nodiscard]] double deskew_correction_m(const Eigen::Isometry3d& estimate, double dt_s) const;
+  /// The motion over this scan's own revolution (after its stamp): the motion since the last
+  /// scan (implied, over dt_s), extrapolated with config.deskew_acceleration times the change
+  /// from the interval before.
+  [[nodiscard]] Eigen::Isometry3d forward_motion(const Eigen::Isometry3d& implied,
+                                                 double dt_s) const;
   /// Compensates and registers again while the compensation changes noticeably.
   void refine_passes(core::OrganizedScan& scan, double dt_s, bool converged, OdometryResult& result,
                      Eigen::Isometry3d& estimate);
@@ -145,8 +150,11 @@ class Odometry {
   bool neighbours_ready_{false};
   std::vector<Eigen::Vector3f> source_normals_, valid_normals_;
   Eigen::Isometry3d last_pose_{Eigen::Isometry3d::Identity()};
-  Eigen::Isometry3d motion_{Eigen::Isometry3d::Identity()};   // last scan-to-scan motion
-  double motion_dt_s_{0.0};                                   // ... and its duration
+  Eigen::Isometry3d motion_{Eigen::Isometry3d::Identity()};  // last scan-to-scan motion
+  double motion_dt_s_{0.0};                                  // ... and its duration
+  Eigen::Isometry3d change_{Eigen::Isometry3d::Identity()};  // motion_ after the one before
+  bool change_known_{false};                                 // ... measured (two intervals)
+  bool velocity_reset_{false};  // motion_ is the stop assumed after a degenerate scan
   Eigen::Isometry3d applied_{Eigen::Isometry3d::Identity()};  // this scan compensated with this
   std::int64_t last_stamp_ns_{0};
   double error_sse_{0.0};
