@@ -210,7 +210,11 @@ def test_odometry_follows_a_flying_sensor():
         assert "odometry" in frame.times_ms
         errors.append(np.linalg.norm(result["pose"].translation - s["pose"].translation))
     assert len(errors) == 30
-    assert max(errors) < 0.1
+    # The banking start peaks at 0.09-0.10 m in the first 1.5 s (0.094 m before the motion's
+    # change was extrapolated over a revolution, 0.104 m with it; docs/odometry.md, "Tilt"),
+    # then the estimate settles within a few centimetres.
+    assert max(errors) < 0.15
+    assert max(errors[-10:]) < 0.05
     assert not result["degenerate"]
 
 
