@@ -440,7 +440,9 @@ class Schema {
             "the last minute's and the log's) segmented a point near it, or its static-map voxel "
             "holds free_space_protect_count points: a walker too far or too sparse to be "
             "tracked is seen once at each place, what stands is seen again; judged when the "
-            "scan leaves the log, so later scans count up to log_delay_scans; 0 = off");
+            "scan leaves the log and only with transient_scans later scans logged (so it needs "
+            "log_delay_scans >= transient_scans, and a run's last scans are not judged); 0 = "
+            "off");
     number("transient_cell_m", m.transient_cell_m, 0.01, 10.0,
            "transient line: near = in the same horizontal cell of this edge or one of the eight "
            "around it (m)");

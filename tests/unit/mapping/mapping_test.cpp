@@ -675,6 +675,10 @@ TEST(DynamicObjectFilter, TransientLineTakesAnUntrackedWalkerNotAPost) {
   core::MappingConfig high = defaults;
   high.transient_min_height_m = kPersonHeight + 0.1;
   EXPECT_EQ(transient_run(high, true).removed, 0u);
+  // A log shorter than transient_scans never holds enough later scans to judge one.
+  core::MappingConfig short_log = defaults;
+  short_log.log_delay_scans = defaults.transient_scans - 1;
+  EXPECT_EQ(transient_run(short_log, true).removed, 0u);
 }
 
 // lowest_in against a direct scan of the points, with and without the block bounds.
