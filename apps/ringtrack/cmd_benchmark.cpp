@@ -98,16 +98,15 @@ std::string table_row(const std::string& label, std::int64_t scans, const eval::
   return o.str();
 }
 
+// The report's sections, in order (report_markdown).
+
 // stopped_by: the signal that interrupted the benchmark after cases.size() of runs_planned runs
 // ("" when it ran them all).
-std::string report_markdown(const BenchmarkOptions& o, const std::vector<BenchmarkCase>& cases,
-                            const std::vector<Aggregate>& groups, double wall_s,
-                            const std::string& config_text, bool plotted, std::size_t runs_planned,
-                            const std::string& stopped_by) {
-  std::ostringstream md;
+void report_header(std::ostringstream& md, const BenchmarkOptions& o, std::size_t cases,
+                   double wall_s, std::size_t runs_planned, const std::string& stopped_by) {
   md << "# ringtrack benchmark\n\n";
   if (!stopped_by.empty()) {
-    md << "**Interrupted by " << stopped_by << " after " << cases.size() << " of " << runs_planned
+    md << "**Interrupted by " << stopped_by << " after " << cases << " of " << runs_planned
        << " runs: every figure below covers the finished runs only.**\n\n";
   }
   md << "- date: " << experiment::utc_minute_now() << "\n";
@@ -123,7 +122,10 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
      << (o.no_deskew ? ", moving-sensor scans not motion-compensated" : "")
      << (o.odometry ? ", poses estimated by the odometry from the scans (--odometry)" : "") << "\n";
   md << "- wall time " << fixed(wall_s, 1) << " s (simulation + pipeline + evaluation)\n\n";
+}
 
+void accuracy_section(std::ostringstream& md, const std::vector<BenchmarkCase>& cases,
+                      const std::vector<Aggregate>& groups) {
   md << "## Accuracy (as the paper's Table II)\n\n";
   md << "Paper mode (hypotheses classified dynamic at least once), class person, match below "
         "0.5 m; MT/PT/ML as ratios (counts); FN = misses; GT = ground-truth presences. Map: "
@@ -145,7 +147,11 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
   for (const Aggregate& g : groups) {
     md << table_row("**" + g.label + "**", g.scans, g.mot, g.map);
   }
+}
 
+void moving_only_section(std::ostringstream& md, const BenchmarkOptions& o,
+                         const std::vector<BenchmarkCase>& cases,
+                         const std::vector<Aggregate>& groups) {
   md << "\n## Accuracy on moving objects only\n\n";
   md << "The same tracks against ground truth restricted to objects that move: an object moves "
         "when its true centre leaves a disc of radius "
@@ -168,28 +174,32 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
   for (const Aggregate& g : groups) {
     moving_row("**" + g.label + "**", g.moving_objects, g.never_moving_objects, g.moving_only);
   }
+}
 
-  if (o.person_figures) {
-    md << "\n## Accuracy in person mode (standing people included)\n\n";
-    md << "The same tracks, evaluating the hypotheses flagged `person` at least once (confirmed "
-          "and person-shaped for `tracking.person_min_scans` scans, moving or not; "
-          "docs/tracking.md) in all their scans, against the same ground truth as the paper mode "
-          "(every person with hit points, standing or walking). Hypotheses: person-flagged ids "
-          "evaluated.\n\n";
-    md << "| scenario | hypotheses | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML | "
-          "IDSW | FP | FN | GT |\n";
-    md << "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: |\n";
-    for (const BenchmarkCase& c : cases) {
-      if (!c.person) continue;
-      md << "| " << case_label(c) << " | " << c.person->hypotheses_evaluated << " | "
-         << mot_cells(c.person->summary) << " |\n";
-    }
-    for (const Aggregate& g : groups) {
-      md << "| **" << g.label << "** | " << g.person_hypotheses << " | " << mot_cells(g.person)
-         << " |\n";
-    }
+void person_section(std::ostringstream& md, const std::vector<BenchmarkCase>& cases,
+                    const std::vector<Aggregate>& groups) {
+  md << "\n## Accuracy in person mode (standing people included)\n\n";
+  md << "The same tracks, evaluating the hypotheses flagged `person` at least once (confirmed "
+        "and person-shaped for `tracking.person_min_scans` scans, moving or not; "
+        "docs/tracking.md) in all their scans, against the same ground truth as the paper mode "
+        "(every person with hit points, standing or walking). Hypotheses: person-flagged ids "
+        "evaluated.\n\n";
+  md << "| scenario | hypotheses | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML | "
+        "IDSW | FP | FN | GT |\n";
+  md << "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: |\n";
+  for (const BenchmarkCase& c : cases) {
+    if (!c.person) continue;
+    md << "| " << case_label(c) << " | " << c.person->hypotheses_evaluated << " | "
+       << mot_cells(c.person->summary) << " |\n";
   }
+  for (const Aggregate& g : groups) {
+    md << "| **" << g.label << "** | " << g.person_hypotheses << " | " << mot_cells(g.person)
+       << " |\n";
+  }
+}
 
+// The paper's figures beside the static and moving groups, and the goal for the defaults.
+void paper_section(std::ostringstream& md, const std::vector<Aggregate>& groups) {
   md << "\n## Beside the paper\n\n";
   md << "The paper's figures are after leave-one-out tuning on its own Gazebo scenarios; ours use "
         "the default configuration on ringtrack's simulator, so they are alike in kind, not "
@@ -227,6 +237,10 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
                      g.mot.mostly_lost_ratio() <= goal.ml_ratio;
     md << " " << g.label << ": " << (met ? "met" : "not met") << ".";
   }
+}
+
+void time_section(std::ostringstream& md, const std::vector<BenchmarkCase>& cases,
+                  const std::vector<Aggregate>& groups, bool plotted) {
   md << "\n\n## Time per stage (ms per scan)\n\n";
   md << "Wall time of each stage of `Pipeline::process`, one thread; median / p95 / max over the "
         "scans.\n\n";
@@ -247,6 +261,19 @@ std::string report_markdown(const BenchmarkOptions& o, const std::vector<Benchma
                    "Fig. 6)."
                  : " (no plot: python3-matplotlib unavailable or --no-plot).")
      << "\n\n";
+}
+
+std::string report_markdown(const BenchmarkOptions& o, const std::vector<BenchmarkCase>& cases,
+                            const std::vector<Aggregate>& groups, double wall_s,
+                            const std::string& config_text, bool plotted, std::size_t runs_planned,
+                            const std::string& stopped_by) {
+  std::ostringstream md;
+  report_header(md, o, cases.size(), wall_s, runs_planned, stopped_by);
+  accuracy_section(md, cases, groups);
+  moving_only_section(md, o, cases, groups);
+  if (o.person_figures) person_section(md, cases, groups);
+  paper_section(md, groups);
+  time_section(md, cases, groups, plotted);
   md << "<details><summary>configuration</summary>\n\n```yaml\n"
      << config_text << "```\n\n</details>\n";
   return md.str();
