@@ -485,9 +485,12 @@ void DynamicObjectFilter::note_transient_candidates(LoggedScan& logged,
     // Points a track already removed are not noted: a walker's place confirms no later walker.
     if (segments[logged.cells[i]] == 0 || logged.removed[i] != 0) continue;
     if (!(logged.points[i].z() >= min_z)) continue;
+    // The key now, while the point is in cache: the scan is judged 50 scans later. A point
+    // without a cell (beyond the grid's +-2^30 cells) is never judged.
+    const std::uint64_t key = transient_grid_.key(logged.points[i]);
+    if (key == TransientGrid::kNoCell) continue;
     logged.transient_candidates.push_back(static_cast<std::uint32_t>(i));
-    // The key now, while the point is in cache: the scan is judged 50 scans later.
-    logged.transient_keys.push_back(transient_grid_.key(logged.points[i]));
+    logged.transient_keys.push_back(key);
   }
   transient_grid_.note(logged.transient_keys, logged.sequence);
 }

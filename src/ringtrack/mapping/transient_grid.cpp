@@ -41,7 +41,7 @@ void TransientGrid::clear() {
 std::uint64_t TransientGrid::key(const Eigen::Vector3f& p) const {
   const float x = p.x() * inverse_cell_;
   const float y = p.y() * inverse_cell_;
-  // NaN fails both comparisons, infinity the second.
+  // NaN and infinity fail the comparison.
   if (!(std::abs(x) < kIndexLimit) || !(std::abs(y) < kIndexLimit)) return kNoCell;
   const auto ix = static_cast<std::uint64_t>(floor_index(x) + (1LL << 31));
   const auto iy = static_cast<std::uint64_t>(floor_index(y) + (1LL << 31));
