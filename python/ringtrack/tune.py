@@ -26,9 +26,47 @@ EXIT_INTERRUPTED = 128  # + the signal: 130 for Ctrl-C (SIGINT), 143 for SIGTERM
 _stopped_by = [signal.SIGINT]
 
 
+# Inside Optuna's optimize loop but outside a trial's objective (its sampler, its bookkeeping
+# after a trial, the callbacks), an interrupt waits: Optuna 3.1 is not safe against one there (a
+# KeyboardInterrupt inside its tell of a finished trial ended in an UnboundLocalError and exit 1,
+# not 130). It is raised where it is safe: at once inside an objective (Optuna marks the trial
+# failed and raises it on), at the next trial's start, or when the optimize loop returns.
+_optuna_busy = [False]
+_pending = [False]
+
+
 def _interrupt(signum, _frame):
     _stopped_by[0] = signum
+    if _optuna_busy[0]:
+        _pending[0] = True
+        return
     raise KeyboardInterrupt
+
+
+def _raise_if_pending():
+    if _pending[0]:
+        raise KeyboardInterrupt
+
+
+def _guarded(objective):
+    """The objective with interrupts raised at once while it runs, and a waiting one first."""
+    def run(trial):
+        _optuna_busy[0] = False
+        try:
+            _raise_if_pending()
+            return objective(trial)
+        finally:
+            _optuna_busy[0] = True
+    return run
+
+
+def _optimize_guarded(study, objective, callbacks):
+    _optuna_busy[0] = True
+    try:
+        study.optimize(_guarded(objective), callbacks=callbacks)
+    finally:
+        _optuna_busy[0] = False
+    _raise_if_pending()
 
 
 def interrupted_status():
@@ -252,7 +290,7 @@ def optimise(args, storage, folds, space, base_yaml, objectives, worker_index, b
         if base:  # none when every key's base value lies outside the space
             study.enqueue_trial(base, user_attrs={"base": True}, skip_if_exists=True)
         objective = tuning.Objective(space, train, test, base_yaml, objectives, worker)
-        study.optimize(objective, callbacks=[MaxTrialsCallback(args.trials, states=states),
+        _optimize_guarded(study, objective, [MaxTrialsCallback(args.trials, states=states),
                                              Progress(args, fold, args.trials)])
 
 
@@ -430,6 +468,7 @@ def report_only(args, out, storage, base_yaml, space):
 def main(argv=None):
     argv = sys.argv[1:] if argv is None else argv
     args = parse_args(argv)
+    signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _interrupt)
     try:
         import optuna  # noqa: F401
