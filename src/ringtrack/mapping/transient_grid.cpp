@@ -15,6 +15,11 @@ constexpr std::uint64_t kFibonacci = 0x9E3779B97F4A7C15ULL;  // 2^64 / golden ra
 constexpr std::size_t kAhead = 8;       // keys between a slot's prefetch and its use
 constexpr float kIndexLimit = 0x1p30f;  // cell indices within +-2^30 fit 32 bits with an offset
 
+// Fibonacci hashing: the top `bits` bits of the product, which mix both halves of the key.
+std::size_t top_bits_of_hash(std::uint64_t key, int bits) {
+  return static_cast<std::size_t>((key * kFibonacci) >> (64 - bits));
+}
+
 // floor(v) for |v| < 2^30: truncation and a step down for negative fractions (std::floor is a
 // library call without SSE4.1, and this runs for every candidate point of every scan).
 std::int64_t floor_index(float v) {
@@ -34,7 +39,7 @@ TransientGrid::TransientGrid(double cell_m, std::uint64_t memory_scans)
 
 void TransientGrid::clear() {
   slots_.assign(kMinSlots, Slot{kNoCell, 0, 0});
-  shift_ = 64 - std::countr_zero(kMinSlots);
+  bits_ = std::countr_zero(kMinSlots);
   size_ = 0;
 }
 
@@ -49,8 +54,7 @@ std::uint64_t TransientGrid::key(const Eigen::Vector3f& p) const {
 }
 
 std::size_t TransientGrid::home(std::uint64_t key) const {
-  // Fibonacci hashing: the top bits of the product mix both halves of the key.
-  return static_cast<std::size_t>((key * kFibonacci) >> shift_);
+  return top_bits_of_hash(key, bits_);
 }
 
 const TransientGrid::Slot* TransientGrid::find(std::uint64_t key) const {
@@ -87,11 +91,12 @@ void TransientGrid::note(const std::vector<std::uint64_t>& keys, std::uint64_t s
   unique_.clear();
   // The points of one object fall in a few cells, ring after ring: a small direct-mapped filter
   // of the keys taken in this batch drops most repeats before they cost a table probe.
-  std::array<std::uint64_t, 512> taken;
+  constexpr int kTakenBits = 9;
+  std::array<std::uint64_t, std::size_t{1} << kTakenBits> taken;
   taken.fill(kNoCell);
   for (const std::uint64_t key : keys) {
     if (key == kNoCell) continue;
-    std::uint64_t& seen = taken[(key * kFibonacci) >> 55];
+    std::uint64_t& seen = taken[top_bits_of_hash(key, kTakenBits)];
     if (seen == key) continue;
     seen = key;
     unique_.push_back(key);
@@ -117,7 +122,7 @@ bool TransientGrid::confirmed(const Eigen::Vector3f& p, std::uint64_t sequence,
 bool TransientGrid::confirmed(std::uint64_t key, std::uint64_t sequence, std::uint64_t k) const {
   if (key == kNoCell) return false;
   // The point's own cell first: what stands there is mostly confirmed by it. A neighbour's key
-  // is the own key with its halves shifted (key_of keeps indices within +-2^30, so no half
+  // is the own key with its halves shifted (key() keeps indices within +-2^30, so no half
   // overflows into the other).
   for (const auto& [dx, dy] :
        {std::pair{0, 0}, {-1, -1}, {-1, 0}, {-1, 1}, {0, -1}, {0, 1}, {1, -1}, {1, 0}, {1, 1}}) {
@@ -152,7 +157,7 @@ void TransientGrid::rebuild(std::size_t extra) {
   // At most a quarter full afterwards, so the next rebuild is at least as many inserts away.
   const std::size_t slots = std::max(kMinSlots, std::bit_ceil(4 * (kept.size() + extra)));
   slots_.assign(slots, Slot{kNoCell, 0, 0});
-  shift_ = 64 - std::countr_zero(slots);
+  bits_ = std::countr_zero(slots);
   const std::size_t mask = slots - 1;
   for (const Slot& s : kept) {
     std::size_t i = home(s.key);

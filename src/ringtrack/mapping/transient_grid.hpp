@@ -66,7 +66,7 @@ class TransientGrid {
   float inverse_cell_;
   std::uint64_t memory_scans_;
   std::vector<Slot> slots_;  // open addressing, linear probing, a power of two
-  int shift_{0};             // 64 - log2(slots_.size())
+  int bits_{0};              // log2(slots_.size())
   std::size_t size_{0};
   std::uint64_t newest_{0};
   std::vector<std::uint64_t> unique_;  // note()'s batch without repeats
