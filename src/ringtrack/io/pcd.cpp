@@ -531,10 +531,10 @@ std::string_view to_string(PcdEncoding encoding) {
   return "binary";
 }
 
-// Long because it reads the header's lines in the order the PCD format fixes (VERSION ... DATA),
-// each with its own check and message (docs/formats.md, "PCD files").
-PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::string& name) {
-  PcdHeader h;
+namespace {
+
+// A header's lines as read, before they are checked against each other.
+struct PcdHeaderLines {
   std::vector<std::string_view> names;
   std::vector<std::string_view> sizes;
   std::vector<std::string_view> types;
@@ -543,9 +543,120 @@ PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::strin
   bool have_height = false;
   bool have_data = false;
   std::optional<std::size_t> points;
+};
+
+PcdEncoding parse_data_line(const std::vector<std::string_view>& rest, const std::string& where) {
+  if (rest.size() != 1) fail(where, "DATA expects one of ascii, binary, binary_compressed");
+  if (rest[0] == "ascii") return PcdEncoding::kAscii;
+  if (rest[0] == "binary") return PcdEncoding::kBinary;
+  if (rest[0] == "binary_compressed") return PcdEncoding::kBinaryCompressed;
+  fail(where, "unknown DATA " + quoted(rest[0]) + " (expected ascii, binary or binary_compressed)");
+}
+
+// WIDTH, HEIGHT or POINTS.
+void read_dimension_line(std::string_view key, const std::vector<std::string_view>& rest,
+                         const std::string& where, PcdHeaderLines& lines, PcdHeader& h) {
+  if (rest.size() != 1) fail(where, std::string(key) + " expects one integer");
+  const std::size_t v = parse_count(rest[0], where, key, key == "POINTS" ? 0 : 1);
+  if (key == "WIDTH") {
+    h.width = v;
+    lines.have_width = true;
+  } else if (key == "HEIGHT") {
+    h.height = v;
+    lines.have_height = true;
+  } else {
+    lines.points = v;
+  }
+}
+
+// One header line, its keyword and values, into lines and h.
+void read_header_line(std::string_view key, const std::vector<std::string_view>& rest,
+                      const std::string& where, PcdHeaderLines& lines, PcdHeader& h) {
+  if (key == "VERSION") {
+    // 0.7 is the current version; older files with the same keywords read the same way.
+  } else if (key == "FIELDS" || key == "COLUMNS") {
+    lines.names = rest;
+  } else if (key == "SIZE") {
+    lines.sizes = rest;
+  } else if (key == "TYPE") {
+    lines.types = rest;
+  } else if (key == "COUNT") {
+    lines.counts = rest;
+  } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
+    read_dimension_line(key, rest, where, lines, h);
+  } else if (key == "VIEWPOINT") {
+    if (rest.size() != 7) fail(where, "VIEWPOINT expects 7 numbers (tx ty tz qw qx qy qz)");
+  } else if (key == "DATA") {
+    h.encoding = parse_data_line(rest, where);
+    lines.have_data = true;
+  } else {
+    fail(where, "unknown header keyword " + quoted(key) + " (not a PCD v0.7 file?)");
+  }
+}
+
+void require_one_value_per_field(const std::vector<std::string_view>& values, const char* key,
+                                 std::size_t fields, const std::string& name) {
+  if (values.size() != fields) {
+    fail(name, std::string(key) + " lists " + std::to_string(values.size()) + " values for " +
+                   std::to_string(fields) + " FIELDS");
+  }
+}
+
+// The lines against each other: every per-field line as long as FIELDS, the dimensions given.
+void check_header_lines(const PcdHeaderLines& lines, const PcdHeader& h, const std::string& name) {
+  if (!lines.have_data) fail(name, "no DATA line: not a PCD file, or its header is truncated");
+  if (lines.names.empty()) fail(name, "header has no FIELDS");
+  require_one_value_per_field(lines.sizes, "SIZE", lines.names.size(), name);
+  require_one_value_per_field(lines.types, "TYPE", lines.names.size(), name);
+  if (!lines.counts.empty()) {
+    require_one_value_per_field(lines.counts, "COUNT", lines.names.size(), name);
+  }
+  if (!lines.have_width) fail(name, "header has no WIDTH");
+  if (!lines.have_height) fail(name, "header has no HEIGHT");
+  if (lines.points && *lines.points != h.width * h.height) {
+    fail(name, "POINTS " + std::to_string(*lines.points) + " does not equal WIDTH * HEIGHT = " +
+                   std::to_string(h.width) + " * " + std::to_string(h.height));
+  }
+}
+
+// Field k of the checked lines (its offset is left to the caller).
+PcdField parse_field(const PcdHeaderLines& lines, std::size_t k, const std::string& name) {
+  PcdField f;
+  f.name = std::string(lines.names[k]);
+  const std::string what = "field '" + f.name + "'";
+  const std::string_view type = lines.types[k];
+  if (type.size() != 1 || (type[0] != 'F' && type[0] != 'U' && type[0] != 'I')) {
+    fail(name, what + ": unknown TYPE " + quoted(type) + " (expected F, U or I)");
+  }
+  f.type = type[0];
+  const auto size = parse_int(lines.sizes[k]);
+  const bool size_ok =
+      size && (*size == 4 || *size == 8 || (f.type != 'F' && (*size == 1 || *size == 2)));
+  if (!size_ok) {
+    fail(name, what + ": unsupported SIZE " + quoted(lines.sizes[k]) + " for TYPE " + f.type +
+                   " (expected F4, F8, U1/U2/U4/U8 or I1/I2/I4/I8)");
+  }
+  f.size = static_cast<int>(*size);
+  if (!lines.counts.empty()) {
+    const auto count = parse_int(lines.counts[k]);
+    if (!count || *count < 1 || *count > 65536) {
+      fail(name, what + ": COUNT " + quoted(lines.counts[k]) + " is not an integer in [1, 65536]");
+    }
+    f.count = static_cast<int>(*count);
+  }
+  return f;
+}
+
+}  // namespace
+
+// Reads the header's lines in the order the PCD format fixes (VERSION ... DATA), each with its own
+// check and message, then checks them against each other (docs/formats.md, "PCD files").
+PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::string& name) {
+  PcdHeader h;
+  PcdHeaderLines lines;
   std::size_t pos = 0;
   std::size_t line_no = 0;
-  while (pos < bytes.size() && !have_data) {
+  while (pos < bytes.size() && !lines.have_data) {
     std::size_t end = pos;
     while (end < bytes.size() && bytes[end] != '\n') ++end;
     const std::string_view line(reinterpret_cast<const char*>(bytes.data()) + pos, end - pos);
@@ -554,95 +665,17 @@ PcdHeader parse_pcd_header(std::span<const std::uint8_t> bytes, const std::strin
     const auto tokens = split_tokens(line);
     if (tokens.empty() || tokens.front().front() == '#') continue;
     const std::string where = name + ": header line " + std::to_string(line_no);
-    const std::string_view key = tokens.front();
     const std::vector<std::string_view> rest(tokens.begin() + 1, tokens.end());
-    if (key == "VERSION") {
-      // 0.7 is the current version; older files with the same keywords read the same way.
-    } else if (key == "FIELDS" || key == "COLUMNS") {
-      names = rest;
-    } else if (key == "SIZE") {
-      sizes = rest;
-    } else if (key == "TYPE") {
-      types = rest;
-    } else if (key == "COUNT") {
-      counts = rest;
-    } else if (key == "WIDTH" || key == "HEIGHT" || key == "POINTS") {
-      if (rest.size() != 1) fail(where, std::string(key) + " expects one integer");
-      const std::size_t v = parse_count(rest[0], where, key, key == "POINTS" ? 0 : 1);
-      if (key == "WIDTH") {
-        h.width = v;
-        have_width = true;
-      } else if (key == "HEIGHT") {
-        h.height = v;
-        have_height = true;
-      } else {
-        points = v;
-      }
-    } else if (key == "VIEWPOINT") {
-      if (rest.size() != 7) fail(where, "VIEWPOINT expects 7 numbers (tx ty tz qw qx qy qz)");
-    } else if (key == "DATA") {
-      if (rest.size() != 1) fail(where, "DATA expects one of ascii, binary, binary_compressed");
-      if (rest[0] == "ascii") {
-        h.encoding = PcdEncoding::kAscii;
-      } else if (rest[0] == "binary") {
-        h.encoding = PcdEncoding::kBinary;
-      } else if (rest[0] == "binary_compressed") {
-        h.encoding = PcdEncoding::kBinaryCompressed;
-      } else {
-        fail(where,
-             "unknown DATA " + quoted(rest[0]) + " (expected ascii, binary or binary_compressed)");
-      }
-      have_data = true;
+    read_header_line(tokens.front(), rest, where, lines, h);
+    if (lines.have_data) {
       h.data_offset = pos;
       h.header_lines = line_no;
-    } else {
-      fail(where, "unknown header keyword " + quoted(key) + " (not a PCD v0.7 file?)");
     }
   }
-  if (!have_data) fail(name, "no DATA line: not a PCD file, or its header is truncated");
-  if (names.empty()) fail(name, "header has no FIELDS");
-  if (sizes.size() != names.size()) {
-    fail(name, "SIZE lists " + std::to_string(sizes.size()) + " values for " +
-                   std::to_string(names.size()) + " FIELDS");
-  }
-  if (types.size() != names.size()) {
-    fail(name, "TYPE lists " + std::to_string(types.size()) + " values for " +
-                   std::to_string(names.size()) + " FIELDS");
-  }
-  if (!counts.empty() && counts.size() != names.size()) {
-    fail(name, "COUNT lists " + std::to_string(counts.size()) + " values for " +
-                   std::to_string(names.size()) + " FIELDS");
-  }
-  if (!have_width) fail(name, "header has no WIDTH");
-  if (!have_height) fail(name, "header has no HEIGHT");
-  if (points && *points != h.width * h.height) {
-    fail(name, "POINTS " + std::to_string(*points) + " does not equal WIDTH * HEIGHT = " +
-                   std::to_string(h.width) + " * " + std::to_string(h.height));
-  }
+  check_header_lines(lines, h, name);
   std::size_t offset = 0;
-  for (std::size_t k = 0; k < names.size(); ++k) {
-    PcdField f;
-    f.name = std::string(names[k]);
-    const std::string what = "field '" + f.name + "'";
-    if (types[k].size() != 1 || (types[k][0] != 'F' && types[k][0] != 'U' && types[k][0] != 'I')) {
-      fail(name, what + ": unknown TYPE " + quoted(types[k]) + " (expected F, U or I)");
-    }
-    f.type = types[k][0];
-    const auto size = parse_int(sizes[k]);
-    const bool size_ok =
-        size && (*size == 4 || *size == 8 || (f.type != 'F' && (*size == 1 || *size == 2)));
-    if (!size_ok) {
-      fail(name, what + ": unsupported SIZE " + quoted(sizes[k]) + " for TYPE " + f.type +
-                     " (expected F4, F8, U1/U2/U4/U8 or I1/I2/I4/I8)");
-    }
-    f.size = static_cast<int>(*size);
-    if (!counts.empty()) {
-      const auto count = parse_int(counts[k]);
-      if (!count || *count < 1 || *count > 65536) {
-        fail(name, what + ": COUNT " + quoted(counts[k]) + " is not an integer in [1, 65536]");
-      }
-      f.count = static_cast<int>(*count);
-    }
+  for (std::size_t k = 0; k < lines.names.size(); ++k) {
+    PcdField f = parse_field(lines, k, name);
     f.offset = offset;
     offset += f.bytes();
     h.fields.push_back(std::move(f));

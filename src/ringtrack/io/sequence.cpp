@@ -125,9 +125,9 @@ SequenceMeta SequenceMeta::for_sensor(const core::SensorModel& model, int column
   return meta;
 }
 
-// Long because it reads sequence.yaml key by key (docs/formats.md), each key with its own check
-// and message; splitting it would scatter one format's rules.
-SequenceMeta read_sequence_yaml(const fs::path& path) {
+namespace {
+
+YAML::Node load_sequence_yaml(const fs::path& path) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path.string());
@@ -141,12 +141,140 @@ SequenceMeta read_sequence_yaml(const fs::path& path) {
     throw core::InputError(path.string() +
                            ": expected a mapping of keys (format_version, sensor, ...)");
   }
+  return root;
+}
+
+// The keys a sequence.yaml must have, or may have only with some sensors, that were given.
+struct SequenceKeysGiven {
+  bool version = false;
+  bool sensor = false;
+  bool rate = false;
+  bool columns = false;
+  bool max_range = false;
+};
+
+int read_format_version(const YAML::Node& value, const std::string& where) {
+  const int version = yaml_as<int>(value, where, "an integer");
+  if (version != kSequenceFormatVersion) {
+    throw core::InputError(where + ": unsupported version " + std::to_string(version) +
+                           " (this ringtrack reads " + std::to_string(kSequenceFormatVersion) +
+                           ")");
+  }
+  return version;
+}
+
+std::string read_sensor_name(const YAML::Node& value, const std::string& where) {
+  const std::string expected = core::built_in_model_list() + " (or generic)";
+  std::string sensor = lower(yaml_as<std::string>(value, where, expected.c_str()));
+  if (sensor == "generic") return sensor;
+  try {
+    core::SensorModel::by_name(sensor);
+  } catch (const core::Error&) {
+    throw core::InputError(where + ": unknown sensor '" + sensor + "' (expected " +
+                           core::built_in_model_list() + " or generic)");
+  }
+  return sensor;
+}
+
+void append_elevations(const YAML::Node& value, const std::string& where,
+                       std::vector<double>& elevations_deg) {
+  if (!value.IsSequence() || value.size() == 0) {
+    throw core::InputError(where + ": expected a list of ring elevations in degrees");
+  }
+  for (const auto& e : value) {
+    const auto deg = yaml_as<double>(e, where, "a list of numbers");
+    if (!std::isfinite(deg) || std::abs(deg) >= 90.0) {
+      throw core::InputError(where + ": elevation " + e.Scalar() + " outside (-90, 90) degrees");
+    }
+    elevations_deg.push_back(deg);
+  }
+}
+
+double read_scan_rate(const YAML::Node& value, const std::string& where) {
+  const double rate_hz = yaml_as<double>(value, where, "a number");
+  if (!(rate_hz > 0.0 && rate_hz <= 1000.0)) {
+    throw core::InputError(where + ": expected a rate in (0, 1000] Hz");
+  }
+  return rate_hz;
+}
+
+int read_columns(const YAML::Node& value, const std::string& where) {
+  const int columns = yaml_as<int>(value, where, "an integer");
+  if (columns < 8 || columns > kMaxColumns) {
+    throw core::InputError(where + ": expected an integer in [8, " + std::to_string(kMaxColumns) +
+                           "]");
+  }
+  return columns;
+}
+
+// One key of sequence.yaml (docs/formats.md) into meta, with its own check and message.
+void read_sequence_key(const std::string& key, const YAML::Node& value, const std::string& where,
+                       SequenceMeta& meta, SequenceKeysGiven& given) {
+  if (key == "format_version") {
+    meta.format_version = read_format_version(value, where);
+    given.version = true;
+  } else if (key == "sensor") {
+    meta.sensor = read_sensor_name(value, where);
+    given.sensor = true;
+  } else if (key == "elevations_deg") {
+    append_elevations(value, where, meta.elevations_deg);
+  } else if (key == "max_range_m") {
+    meta.max_range_m = yaml_as<double>(value, where, "a number");
+    if (!(meta.max_range_m > 0.0)) throw core::InputError(where + ": expected a positive range");
+    given.max_range = true;
+  } else if (key == "scan_rate_hz") {
+    meta.scan_rate_hz = read_scan_rate(value, where);
+    given.rate = true;
+  } else if (key == "columns") {
+    meta.columns = read_columns(value, where);
+    given.columns = true;
+  } else if (key == "scans") {
+    meta.scans = yaml_as<std::uint64_t>(value, where, "a non-negative integer");
+  } else if (key == "name") {
+    meta.name = yaml_as<std::string>(value, where, "a string");
+  } else if (key == "scenario") {
+    meta.scenario = yaml_as<std::string>(value, where, "a string or number");
+  } else if (key == "seed") {
+    meta.seed = yaml_as<std::uint64_t>(value, where, "a non-negative integer");
+  } else if (key == "sensor_height_m") {
+    meta.sensor_height_m = yaml_as<double>(value, where, "a number");
+    if (!(std::abs(*meta.sensor_height_m) <= 1000.0)) {
+      throw core::InputError(where + ": expected a height within +-1000 m of the ground");
+    }
+  } else {
+    throw core::InputError(where +
+                           ": unknown key (expected format_version, sensor, "
+                           "elevations_deg, max_range_m, scan_rate_hz, columns, scans, name, "
+                           "scenario, seed, sensor_height_m)");
+  }
+}
+
+// The keys against each other: the required ones given, the generic sensor's only with it.
+void check_sequence_keys(const fs::path& path, const SequenceMeta& meta,
+                         const SequenceKeysGiven& given) {
+  const auto missing = [&](bool have, const char* key) {
+    if (!have) throw core::InputError(path.string() + ": missing key '" + key + "'");
+  };
+  missing(given.version, "format_version");
+  missing(given.sensor, "sensor");
+  missing(given.rate, "scan_rate_hz");
+  missing(given.columns, "columns");
+  if (meta.sensor == "generic" && meta.elevations_deg.empty()) {
+    throw core::InputError(path.string() + ": sensor 'generic' needs the key 'elevations_deg'");
+  }
+  if (meta.sensor != "generic" && (!meta.elevations_deg.empty() || given.max_range)) {
+    throw core::InputError(
+        path.string() + ": elevations_deg and max_range_m are only allowed with sensor 'generic'");
+  }
+}
+
+}  // namespace
+
+// Reads sequence.yaml key by key (docs/formats.md), each key with its own check and message.
+SequenceMeta read_sequence_yaml(const fs::path& path) {
+  const YAML::Node root = load_sequence_yaml(path);
   SequenceMeta meta;
-  bool have_version = false;
-  bool have_sensor = false;
-  bool have_rate = false;
-  bool have_columns = false;
-  bool have_max_range = false;
+  SequenceKeysGiven given;
   for (const auto& entry : root) {
     // A list or map as key has no name (as<std::string>() would throw yaml-cpp's own exception).
     if (!entry.first.IsScalar()) {
@@ -154,91 +282,9 @@ SequenceMeta read_sequence_yaml(const fs::path& path) {
                              ": expected a key name, got a list or map as key");
     }
     const std::string key = entry.first.as<std::string>();
-    const YAML::Node& value = entry.second;
-    const std::string where = at_key(path, entry.first, key);
-    if (key == "format_version") {
-      meta.format_version = yaml_as<int>(value, where, "an integer");
-      if (meta.format_version != kSequenceFormatVersion) {
-        throw core::InputError(where + ": unsupported version " +
-                               std::to_string(meta.format_version) + " (this ringtrack reads " +
-                               std::to_string(kSequenceFormatVersion) + ")");
-      }
-      have_version = true;
-    } else if (key == "sensor") {
-      const std::string expected = core::built_in_model_list() + " (or generic)";
-      meta.sensor = lower(yaml_as<std::string>(value, where, expected.c_str()));
-      if (meta.sensor != "generic") {
-        try {
-          core::SensorModel::by_name(meta.sensor);
-        } catch (const core::Error&) {
-          throw core::InputError(where + ": unknown sensor '" + meta.sensor + "' (expected " +
-                                 core::built_in_model_list() + " or generic)");
-        }
-      }
-      have_sensor = true;
-    } else if (key == "elevations_deg") {
-      if (!value.IsSequence() || value.size() == 0) {
-        throw core::InputError(where + ": expected a list of ring elevations in degrees");
-      }
-      for (const auto& e : value) {
-        const auto deg = yaml_as<double>(e, where, "a list of numbers");
-        if (!std::isfinite(deg) || std::abs(deg) >= 90.0) {
-          throw core::InputError(where + ": elevation " + e.Scalar() +
-                                 " outside (-90, 90) degrees");
-        }
-        meta.elevations_deg.push_back(deg);
-      }
-    } else if (key == "max_range_m") {
-      meta.max_range_m = yaml_as<double>(value, where, "a number");
-      if (!(meta.max_range_m > 0.0)) throw core::InputError(where + ": expected a positive range");
-      have_max_range = true;
-    } else if (key == "scan_rate_hz") {
-      meta.scan_rate_hz = yaml_as<double>(value, where, "a number");
-      if (!(meta.scan_rate_hz > 0.0 && meta.scan_rate_hz <= 1000.0)) {
-        throw core::InputError(where + ": expected a rate in (0, 1000] Hz");
-      }
-      have_rate = true;
-    } else if (key == "columns") {
-      meta.columns = yaml_as<int>(value, where, "an integer");
-      if (meta.columns < 8 || meta.columns > kMaxColumns) {
-        throw core::InputError(where + ": expected an integer in [8, " +
-                               std::to_string(kMaxColumns) + "]");
-      }
-      have_columns = true;
-    } else if (key == "scans") {
-      meta.scans = yaml_as<std::uint64_t>(value, where, "a non-negative integer");
-    } else if (key == "name") {
-      meta.name = yaml_as<std::string>(value, where, "a string");
-    } else if (key == "scenario") {
-      meta.scenario = yaml_as<std::string>(value, where, "a string or number");
-    } else if (key == "seed") {
-      meta.seed = yaml_as<std::uint64_t>(value, where, "a non-negative integer");
-    } else if (key == "sensor_height_m") {
-      meta.sensor_height_m = yaml_as<double>(value, where, "a number");
-      if (!(std::abs(*meta.sensor_height_m) <= 1000.0)) {
-        throw core::InputError(where + ": expected a height within +-1000 m of the ground");
-      }
-    } else {
-      throw core::InputError(where +
-                             ": unknown key (expected format_version, sensor, "
-                             "elevations_deg, max_range_m, scan_rate_hz, columns, scans, name, "
-                             "scenario, seed, sensor_height_m)");
-    }
+    read_sequence_key(key, entry.second, at_key(path, entry.first, key), meta, given);
   }
-  const auto missing = [&](bool have, const char* key) {
-    if (!have) throw core::InputError(path.string() + ": missing key '" + key + "'");
-  };
-  missing(have_version, "format_version");
-  missing(have_sensor, "sensor");
-  missing(have_rate, "scan_rate_hz");
-  missing(have_columns, "columns");
-  if (meta.sensor == "generic" && meta.elevations_deg.empty()) {
-    throw core::InputError(path.string() + ": sensor 'generic' needs the key 'elevations_deg'");
-  }
-  if (meta.sensor != "generic" && (!meta.elevations_deg.empty() || have_max_range)) {
-    throw core::InputError(
-        path.string() + ": elevations_deg and max_range_m are only allowed with sensor 'generic'");
-  }
+  check_sequence_keys(path, meta, given);
   return meta;
 }
 

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <optional>
+#include <utility>
 
 #include "ringtrack/core/error.hpp"
 
@@ -43,81 +45,114 @@ Eigen::Matrix3d yaw_matrix(double yaw) {
 
 }  // namespace
 
+namespace {
+
+// Ids 1, 2, ... for the random actors and distractors, skipping the scripted actors' ids.
+class IdSource {
+ public:
+  explicit IdSource(const Scenario& scenario) {
+    for (const auto& s : scenario.scripted) taken_.push_back(s.id);
+  }
+  std::uint32_t next() {
+    while (std::find(taken_.begin(), taken_.end(), next_) != taken_.end()) ++next_;
+    return next_++;
+  }
+
+ private:
+  std::vector<std::uint32_t> taken_;
+  std::uint32_t next_ = 1;
+};
+
+Actor distractor_actor(const Eigen::Vector2d& position, bool cylinder_body, std::uint32_t id,
+                       std::uint64_t seed) {
+  Actor a;
+  a.id = id;
+  a.object_class = ObjectClass::kDistractor;
+  a.rng = Rng(seed);
+  a.height_m = a.rng.uniform(1.6, 1.85);
+  a.reflectivity = static_cast<float>(a.rng.uniform(0.3, 0.8));
+  a.cylinder_body = cylinder_body;
+  a.position = {position.x(), position.y(), 0.0};
+  a.yaw_rad = a.rng.uniform(-kPi, kPi);
+  a.target_speed_mps = 0.0;
+  return a;
+}
+
+Actor scripted_actor(const ScriptedActor& s, int script, std::uint64_t seed) {
+  Actor a;
+  a.id = s.id;
+  a.object_class = s.object_class;
+  a.script = script;
+  a.rng = Rng(seed);
+  const bool has_body =
+      s.object_class == ObjectClass::kPerson || s.object_class == ObjectClass::kDistractor;
+  a.height_m =
+      has_body ? s.height_m.value_or(1.75) : (s.object_class == ObjectClass::kRobot ? 0.42 : 0.2);
+  a.width_scale = has_body && s.width_m ? *s.width_m / kPersonWidthM : 1.0;
+  a.reflectivity = static_cast<float>(s.reflectivity.value_or(0.4));
+  return a;
+}
+
+}  // namespace
+
 ActorWorld::ActorWorld(const Scenario& scenario, std::uint64_t seed)
     : scenario_(&scenario), footprints_(ground_footprints(scenario)) {
   // Distractors are obstacles for walkers; their footprints came with ground_footprints().
+  // One generator hands each actor the seed of its own, in this order.
   Rng rng(Rng::derive(seed, 11));
-  std::vector<std::uint32_t> taken;
-  for (const auto& s : scenario.scripted) taken.push_back(s.id);
-  std::uint32_t next_id = 1;
-  const auto new_id = [&] {
-    while (std::find(taken.begin(), taken.end(), next_id) != taken.end()) ++next_id;
-    return next_id++;
-  };
-  const auto add_random = [&](ObjectClass c) {
-    Actor a;
-    a.id = new_id();
-    a.object_class = c;
-    a.rng = Rng(rng.next());
-    a.height_m = c == ObjectClass::kPerson ? a.rng.uniform(1.5, 1.95)
-                                           : (c == ObjectClass::kRobot ? 0.42 : 0.2);
-    a.width_scale = a.rng.uniform(0.85, 1.15) * (a.height_m / 1.75 * 0.5 + 0.5);
-    a.reflectivity = static_cast<float>(a.rng.uniform(0.15, 0.6));
-    bool placed = false;
-    for (int attempt = 0; attempt < 500 && !placed; ++attempt) {
-      const Eigen::Vector2d p = random_point(a.rng);
-      if (c != ObjectClass::kDrone && !free_at(p, 0.6)) continue;
-      bool clear = true;
-      for (const auto& o : actors_) {
-        if (o.object_class != ObjectClass::kDrone && (o.position.head<2>() - p).norm() < 1.0)
-          clear = false;
-      }
-      if (!clear) continue;
-      a.position = {p.x(), p.y(), c == ObjectClass::kDrone ? a.rng.uniform(3.0, 10.0) : 0.0};
-      placed = true;
+  IdSource ids(scenario);
+  for (const auto& [kind, count] : {std::pair{ObjectClass::kPerson, scenario.people},
+                                    std::pair{ObjectClass::kRobot, scenario.robots},
+                                    std::pair{ObjectClass::kDrone, scenario.drones}}) {
+    for (int i = 0; i < count; ++i) {
+      const std::uint32_t id = ids.next();
+      actors_.push_back(random_actor(kind, id, rng.next()));
     }
-    if (!placed) {
-      throw core::ConfigError("scenario " + scenario.name + ": actors: no free space for " +
-                              std::string(class_name(c)) + " " + std::to_string(a.id) +
-                              " in the walking area");
-    }
-    a.yaw_rad = a.rng.uniform(-kPi, kPi);
-    a.gait_phase_rad = a.rng.uniform(0, 2 * kPi);
-    a.target_speed_mps = random_speed(c, a.rng);
-    choose_goal(a);
-    actors_.push_back(std::move(a));
-  };
-  for (int i = 0; i < scenario.people; ++i) add_random(ObjectClass::kPerson);
-  for (int i = 0; i < scenario.robots; ++i) add_random(ObjectClass::kRobot);
-  for (int i = 0; i < scenario.drones; ++i) add_random(ObjectClass::kDrone);
+  }
   for (std::size_t i = 0; i < scenario.distractors.size(); ++i) {
-    Actor a;
-    a.id = new_id();
-    a.object_class = ObjectClass::kDistractor;
-    a.rng = Rng(rng.next());
-    a.height_m = a.rng.uniform(1.6, 1.85);
-    a.reflectivity = static_cast<float>(a.rng.uniform(0.3, 0.8));
-    a.cylinder_body = i % 2 == 1;
-    a.position = {scenario.distractors[i].x(), scenario.distractors[i].y(), 0.0};
-    a.yaw_rad = a.rng.uniform(-kPi, kPi);
-    a.target_speed_mps = 0.0;
-    actors_.push_back(std::move(a));
+    const std::uint32_t id = ids.next();
+    actors_.push_back(distractor_actor(scenario.distractors[i], i % 2 == 1, id, rng.next()));
   }
   for (std::size_t i = 0; i < scenario.scripted.size(); ++i) {
-    const auto& s = scenario.scripted[i];
-    Actor a;
-    a.id = s.id;
-    a.object_class = s.object_class;
-    a.script = static_cast<int>(i);
-    a.rng = Rng(rng.next());
-    const bool has_body =
-        s.object_class == ObjectClass::kPerson || s.object_class == ObjectClass::kDistractor;
-    a.height_m =
-        has_body ? s.height_m.value_or(1.75) : (s.object_class == ObjectClass::kRobot ? 0.42 : 0.2);
-    a.width_scale = has_body && s.width_m ? *s.width_m / kPersonWidthM : 1.0;
-    a.reflectivity = static_cast<float>(s.reflectivity.value_or(0.4));
-    actors_.push_back(std::move(a));
+    actors_.push_back(scripted_actor(scenario.scripted[i], static_cast<int>(i), rng.next()));
   }
+}
+
+Actor ActorWorld::random_actor(ObjectClass c, std::uint32_t id, std::uint64_t seed) {
+  Actor a;
+  a.id = id;
+  a.object_class = c;
+  a.rng = Rng(seed);
+  a.height_m = c == ObjectClass::kPerson ? a.rng.uniform(1.5, 1.95)
+                                         : (c == ObjectClass::kRobot ? 0.42 : 0.2);
+  a.width_scale = a.rng.uniform(0.85, 1.15) * (a.height_m / 1.75 * 0.5 + 0.5);
+  a.reflectivity = static_cast<float>(a.rng.uniform(0.15, 0.6));
+  const std::optional<Eigen::Vector3d> start = random_start(c, a.rng);
+  if (!start) {
+    throw core::ConfigError("scenario " + scenario_->name + ": actors: no free space for " +
+                            std::string(class_name(c)) + " " + std::to_string(a.id) +
+                            " in the walking area");
+  }
+  a.position = *start;
+  a.yaw_rad = a.rng.uniform(-kPi, kPi);
+  a.gait_phase_rad = a.rng.uniform(0, 2 * kPi);
+  a.target_speed_mps = random_speed(c, a.rng);
+  choose_goal(a);
+  return a;
+}
+
+std::optional<Eigen::Vector3d> ActorWorld::random_start(ObjectClass c, Rng& rng) const {
+  for (int attempt = 0; attempt < 500; ++attempt) {
+    const Eigen::Vector2d p = random_point(rng);
+    if (c != ObjectClass::kDrone && !free_at(p, 0.6)) continue;
+    // At least 1 m from every actor on the ground placed so far (drones fly above them).
+    const bool clear = std::none_of(actors_.begin(), actors_.end(), [&](const Actor& o) {
+      return o.object_class != ObjectClass::kDrone && (o.position.head<2>() - p).norm() < 1.0;
+    });
+    if (!clear) continue;
+    return Eigen::Vector3d{p.x(), p.y(), c == ObjectClass::kDrone ? rng.uniform(3.0, 10.0) : 0.0};
+  }
+  return std::nullopt;
 }
 
 Eigen::Vector2d ActorWorld::random_point(Rng& rng) const {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "ringtrack/sim/geometry.hpp"
@@ -59,6 +60,10 @@ class ActorWorld {
  private:
   void step(Actor& a, double dt_s);
   void choose_goal(Actor& a);
+  /// A person, robot or drone with its body, a free start and a goal, from its own seed.
+  Actor random_actor(ObjectClass c, std::uint32_t id, std::uint64_t seed);
+  /// A free start for a new actor of class c (500 tries), or nullopt.
+  [[nodiscard]] std::optional<Eigen::Vector3d> random_start(ObjectClass c, Rng& rng) const;
   [[nodiscard]] bool free_at(const Eigen::Vector2d& p, double margin) const;
   [[nodiscard]] bool free_path(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
                                double margin) const;

@@ -481,9 +481,12 @@ std::vector<Footprint> ground_footprints(const Scenario& s) {
   return out;
 }
 
-// Long because it is the list of checks, one per field in the scenario's own order, so that a
-// reader can see every bound a scenario file must keep in one place.
-void validate(const Scenario& s, const std::string& src) {
+namespace {
+
+// The checks of validate, one function per part of the scenario in the file's own order, so that
+// a reader sees every bound a scenario file must keep here, and the first broken one is reported.
+
+void validate_world(const Scenario& s, const std::string& src) {
   require_bounded(src, "scenario", "duration_s", s.duration_s, kMaxDurationS);
   require_bounded(src, "scenario", "area_m[0]", s.area_m.x(), kMaxWorldExtentM);
   require_bounded(src, "scenario", "area_m[1]", s.area_m.y(), kMaxWorldExtentM);
@@ -492,25 +495,30 @@ void validate(const Scenario& s, const std::string& src) {
   if (s.ground.amplitude_m > 0)
     require_positive(src, "ground", "wavelength_m", s.ground.wavelength_m);
   require_unit(src, "ground", "reflectivity", s.ground.reflectivity);
+}
+
+void validate_sensor(const SensorSpec& sensor, const std::string& src) {
   try {
-    (void)core::SensorModel::by_name(s.sensor.model);
+    (void)core::SensorModel::by_name(sensor.model);
   } catch (const core::Error& e) {
     fail(src, "sensor", std::string("model: ") + e.what());
   }
-  if (!(s.sensor.range_noise_m >= 0)) fail(src, "sensor", "range_noise_m must be >= 0");
-  require_unit(src, "sensor", "dropout_probability", s.sensor.dropout_probability);
-  require_unit(src, "sensor", "far_dropout_probability", s.sensor.far_dropout_probability);
-  require_bounded(src, "sensor", "figure8_radius_m", s.sensor.figure8_radius_m, kMaxWorldExtentM);
-  require_bounded(src, "sensor", "max_speed_mps", s.sensor.max_speed_mps, kMaxSensorSpeedMps);
-  if (s.sensor.tilt_gain < 0) fail(src, "sensor", "tilt_gain must be >= 0");
-  if (s.sensor.motion == SensorMotion::kScripted) {
-    if (s.sensor.keyframes.empty()) fail(src, "sensor", "motion scripted needs keyframes");
-    for (std::size_t i = 1; i < s.sensor.keyframes.size(); ++i) {
-      if (!(s.sensor.keyframes[i].t_s > s.sensor.keyframes[i - 1].t_s)) {
-        fail(src, "sensor.keyframes[" + std::to_string(i) + "]", "times must increase");
-      }
+  if (!(sensor.range_noise_m >= 0)) fail(src, "sensor", "range_noise_m must be >= 0");
+  require_unit(src, "sensor", "dropout_probability", sensor.dropout_probability);
+  require_unit(src, "sensor", "far_dropout_probability", sensor.far_dropout_probability);
+  require_bounded(src, "sensor", "figure8_radius_m", sensor.figure8_radius_m, kMaxWorldExtentM);
+  require_bounded(src, "sensor", "max_speed_mps", sensor.max_speed_mps, kMaxSensorSpeedMps);
+  if (sensor.tilt_gain < 0) fail(src, "sensor", "tilt_gain must be >= 0");
+  if (sensor.motion != SensorMotion::kScripted) return;
+  if (sensor.keyframes.empty()) fail(src, "sensor", "motion scripted needs keyframes");
+  for (std::size_t i = 1; i < sensor.keyframes.size(); ++i) {
+    if (!(sensor.keyframes[i].t_s > sensor.keyframes[i - 1].t_s)) {
+      fail(src, "sensor.keyframes[" + std::to_string(i) + "]", "times must increase");
     }
   }
+}
+
+void validate_actor_counts(const Scenario& s, const std::string& src) {
   for (const auto& [key, count] : {std::pair{"people", s.people}, std::pair{"robots", s.robots},
                                    std::pair{"drones", s.drones}}) {
     if (count < 0 || count > kMaxActorsPerKind) {
@@ -519,6 +527,9 @@ void validate(const Scenario& s, const std::string& src) {
                std::to_string(count) + ")");
     }
   }
+}
+
+void validate_solids(const Scenario& s, const std::string& src) {
   for (std::size_t i = 0; i < s.boxes.size(); ++i) {
     const std::string e = "boxes[" + std::to_string(i) + "]";
     for (int a = 0; a < 3; ++a) require_positive(src, e, "size_m", s.boxes[i].size_m[a]);
@@ -542,7 +553,10 @@ void validate(const Scenario& s, const std::string& src) {
     require_positive(src, e, "length (from -> to)", (s.walls[i].to_m - s.walls[i].from_m).norm());
     require_unit(src, e, "reflectivity", s.walls[i].reflectivity);
   }
-  const auto footprints = ground_footprints(s);
+}
+
+void validate_distractors(const Scenario& s, const std::vector<Footprint>& footprints,
+                          const std::string& src) {
   for (std::size_t i = 0; i < s.distractors.size(); ++i) {
     for (const auto& f : footprints) {
       if (f.entry == "distractors[" + std::to_string(i) + "]") continue;
@@ -553,75 +567,110 @@ void validate(const Scenario& s, const std::string& src) {
       }
     }
   }
-  // Scripted actors: ids, times, bodies, and paths clear of obstacles and of the sensor's mast.
-  std::vector<Footprint> blocking = footprints;
+}
+
+// What a scripted actor's path must stay clear of: the obstacles and the sensor's mast.
+std::vector<Footprint> path_obstacles(const Scenario& s, std::vector<Footprint> footprints) {
   if (s.sensor.motion != SensorMotion::kScripted) {
     // The mast stands at position_m (the figure 8 flies about it); a scripted sensor has none.
-    blocking.push_back({s.sensor.position_m.head<2>(),
-                        {kSensorKeepOutM, 0.0},
-                        0.0,
-                        true,
-                        "the sensor's keep-out zone (" + fmt_t(kSensorKeepOutM) + " m around " +
-                            fmt_xy(s.sensor.position_m.head<2>()) + ")"});
+    footprints.push_back({s.sensor.position_m.head<2>(),
+                          {kSensorKeepOutM, 0.0},
+                          0.0,
+                          true,
+                          "the sensor's keep-out zone (" + fmt_t(kSensorKeepOutM) + " m around " +
+                              fmt_xy(s.sensor.position_m.head<2>()) + ")"});
   }
-  constexpr double kPathMarginM = 0.2;  // half a body
+  return footprints;
+}
+
+void validate_actor_waypoints(const ScriptedActor& a, const std::string& e,
+                              const std::string& src) {
+  if (a.waypoints.empty()) fail(src, e, "no waypoints");
+  if (a.waypoints.size() < 2) {
+    fail(src, e,
+         "a single waypoint (t=" + fmt_t(a.waypoints[0].t_s) +
+             " s): an actor exists from its first to its last waypoint, give at least two "
+             "(e.g. the same place at t=0 and at the end to stand all the time)");
+  }
+  for (std::size_t i = 1; i < a.waypoints.size(); ++i) {
+    if (!(a.waypoints[i].t_s > a.waypoints[i - 1].t_s)) fail(src, e, "times must increase");
+  }
+}
+
+void validate_actor_body(const ScriptedActor& a, const std::string& e, const std::string& src) {
+  const bool has_body =
+      a.object_class == ObjectClass::kPerson || a.object_class == ObjectClass::kDistractor;
+  if ((a.height_m || a.width_m) && !has_body) {
+    fail(src, e,
+         "height_m/width_m apply to people and distractors only, not to a " +
+             std::string(class_name(a.object_class)));
+  }
+  if (a.height_m && !(*a.height_m >= kMinBodyHeightM && *a.height_m <= kMaxBodyHeightM)) {
+    fail(src, e,
+         "height_m must be in [" + fmt_t(kMinBodyHeightM) + ", " + fmt_t(kMaxBodyHeightM) +
+             "] (got " + fmt_t(*a.height_m) + ")");
+  }
+  if (a.width_m && !(*a.width_m >= kMinBodyWidthM && *a.width_m <= kMaxBodyWidthM)) {
+    fail(src, e,
+         "width_m must be in [" + fmt_t(kMinBodyWidthM) + ", " + fmt_t(kMaxBodyWidthM) + "] (got " +
+             fmt_t(*a.width_m) + ")");
+  }
+  if (a.reflectivity) require_unit(src, e, "reflectivity", *a.reflectivity);
+}
+
+// Waypoints and the segments between them clear of the obstacles by half a body.
+void validate_actor_path(const ScriptedActor& a, const std::vector<Footprint>& obstacles,
+                         const std::string& e, const std::string& src) {
+  constexpr double kPathMarginM = 0.2;
+  for (const auto& w : a.waypoints) {
+    for (const auto& f : obstacles) {
+      if (f.contains(w.xyz_m.head<2>(), kPathMarginM)) {
+        std::ostringstream t;
+        t << "waypoint at t=" << w.t_s << " s " << fmt_xy(w.xyz_m.head<2>()) << " is inside "
+          << f.entry;
+        fail(src, e, t.str());
+      }
+    }
+  }
+  for (std::size_t i = 1; i < a.waypoints.size(); ++i) {
+    const Waypoint& p = a.waypoints[i - 1];
+    const Waypoint& q = a.waypoints[i];
+    for (const auto& f : obstacles) {
+      if (f.crosses(p.xyz_m.head<2>(), q.xyz_m.head<2>(), kPathMarginM)) {
+        fail(src, e,
+             "segment t=" + fmt_t(p.t_s) + "-" + fmt_t(q.t_s) + " s from " +
+                 fmt_xy(p.xyz_m.head<2>()) + " to " + fmt_xy(q.xyz_m.head<2>()) + " crosses " +
+                 f.entry);
+      }
+    }
+  }
+}
+
+// Scripted actors: ids, times, bodies, and paths clear of obstacles and of the sensor's mast
+// (drones fly over them).
+void validate_scripted(const Scenario& s, const std::vector<Footprint>& obstacles,
+                       const std::string& src) {
   std::set<std::uint32_t> ids;
   for (const auto& a : s.scripted) {
     const std::string e = "trajectory of id " + std::to_string(a.id);
     if (a.id == 0) fail(src, e, "ids must be >= 1 (0 is the background label)");
     if (!ids.insert(a.id).second) fail(src, e, "duplicate id");
-    if (a.waypoints.empty()) fail(src, e, "no waypoints");
-    if (a.waypoints.size() < 2) {
-      fail(src, e,
-           "a single waypoint (t=" + fmt_t(a.waypoints[0].t_s) +
-               " s): an actor exists from its first to its last waypoint, give at least two "
-               "(e.g. the same place at t=0 and at the end to stand all the time)");
-    }
-    for (std::size_t i = 1; i < a.waypoints.size(); ++i) {
-      if (!(a.waypoints[i].t_s > a.waypoints[i - 1].t_s)) fail(src, e, "times must increase");
-    }
-    const bool has_body =
-        a.object_class == ObjectClass::kPerson || a.object_class == ObjectClass::kDistractor;
-    if ((a.height_m || a.width_m) && !has_body) {
-      fail(src, e,
-           "height_m/width_m apply to people and distractors only, not to a " +
-               std::string(class_name(a.object_class)));
-    }
-    if (a.height_m && !(*a.height_m >= kMinBodyHeightM && *a.height_m <= kMaxBodyHeightM)) {
-      fail(src, e,
-           "height_m must be in [" + fmt_t(kMinBodyHeightM) + ", " + fmt_t(kMaxBodyHeightM) +
-               "] (got " + fmt_t(*a.height_m) + ")");
-    }
-    if (a.width_m && !(*a.width_m >= kMinBodyWidthM && *a.width_m <= kMaxBodyWidthM)) {
-      fail(src, e,
-           "width_m must be in [" + fmt_t(kMinBodyWidthM) + ", " + fmt_t(kMaxBodyWidthM) +
-               "] (got " + fmt_t(*a.width_m) + ")");
-    }
-    if (a.reflectivity) require_unit(src, e, "reflectivity", *a.reflectivity);
-    if (a.object_class == ObjectClass::kDrone) continue;
-    for (const auto& w : a.waypoints) {
-      for (const auto& f : blocking) {
-        if (f.contains(w.xyz_m.head<2>(), kPathMarginM)) {
-          std::ostringstream t;
-          t << "waypoint at t=" << w.t_s << " s " << fmt_xy(w.xyz_m.head<2>()) << " is inside "
-            << f.entry;
-          fail(src, e, t.str());
-        }
-      }
-    }
-    for (std::size_t i = 1; i < a.waypoints.size(); ++i) {
-      const Waypoint& p = a.waypoints[i - 1];
-      const Waypoint& q = a.waypoints[i];
-      for (const auto& f : blocking) {
-        if (f.crosses(p.xyz_m.head<2>(), q.xyz_m.head<2>(), kPathMarginM)) {
-          fail(src, e,
-               "segment t=" + fmt_t(p.t_s) + "-" + fmt_t(q.t_s) + " s from " +
-                   fmt_xy(p.xyz_m.head<2>()) + " to " + fmt_xy(q.xyz_m.head<2>()) + " crosses " +
-                   f.entry);
-        }
-      }
-    }
+    validate_actor_waypoints(a, e, src);
+    validate_actor_body(a, e, src);
+    if (a.object_class != ObjectClass::kDrone) validate_actor_path(a, obstacles, e, src);
   }
+}
+
+}  // namespace
+
+void validate(const Scenario& s, const std::string& src) {
+  validate_world(s, src);
+  validate_sensor(s.sensor, src);
+  validate_actor_counts(s, src);
+  validate_solids(s, src);
+  const std::vector<Footprint> footprints = ground_footprints(s);
+  validate_distractors(s, footprints, src);
+  validate_scripted(s, path_obstacles(s, footprints), src);
   validate_sensor_path(s, src);
 }
 
