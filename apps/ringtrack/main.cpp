@@ -8,7 +8,9 @@
 #include "ringtrack/core/error.hpp"
 #include "ringtrack/version.hpp"
 
-int main(int argc, char** argv) {
+namespace {
+
+int run(int argc, char** argv) {
   CLI::App app{"ringtrack: detect and track small objects in spinning-LiDAR scans"};
   app.set_version_flag("--version", std::string("ringtrack ") + ringtrack::kVersion);
   app.require_subcommand(1);
@@ -48,4 +50,19 @@ int main(int argc, char** argv) {
     return 2;
   }
   return 0;
+}
+
+}  // namespace
+
+// What run lets escape (the command line set up before its try: CLI11's option setup, an
+// allocation) is an internal error too, never std::terminate.
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "ringtrack: internal error: " << e.what() << "\n";
+  } catch (...) {
+    std::cerr << "ringtrack: internal error: an exception of unknown type\n";
+  }
+  return 2;
 }

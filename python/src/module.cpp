@@ -30,6 +30,8 @@ PYBIND11_MODULE(_ringtrack, m) {
   static py::exception<ringtrack::core::ConfigError> config_error(m, "ConfigError",
                                                                   PyExc_ValueError);
   static py::exception<ringtrack::core::InputError> input_error(m, "InputError", PyExc_ValueError);
+  // pybind11's translator type is a plain function pointer taking the std::exception_ptr by value.
+  // NOLINTNEXTLINE(performance-unnecessary-value-param)
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);

@@ -456,7 +456,7 @@ std::vector<int> elevation_peaks(const std::vector<double>& hist) {
     const double v = hist[static_cast<std::size_t>(b)];
     if (v < threshold) continue;
     const double left = b > 0 ? hist[static_cast<std::size_t>(b - 1)] : 0.0;
-    const double right = b + 1 < kBins ? hist[static_cast<std::size_t>(b + 1)] : 0.0;
+    const double right = b + 1 < kBins ? hist[static_cast<std::size_t>(b) + 1] : 0.0;
     if (!(v >= left && v > right)) continue;
     if (!peaks.empty()) {
       const int a = peaks.back();

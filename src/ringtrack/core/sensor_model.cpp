@@ -121,7 +121,10 @@ SensorModel SensorModel::vlp32c(double scan_rate_hz) {
                               1.4,  -1.4, 1.4,  -1.4, 1.4,  -4.2, 4.2,  -1.4, 1.4,  -1.4};
   for (double& a : azimuth) a = -a;
   std::vector<double> firing(32);
-  for (int i = 0; i < 32; ++i) firing[i] = 2.304 * (i / 2);
+  for (int i = 0; i < 32; ++i) {
+    const int pair = i / 2;  // the lasers fire in pairs, 2.304 us apart
+    firing[i] = 2.304 * pair;
+  }
   SensorModel m = from_laser_tables("VLP-32C", elevation, {}, azimuth, firing);
   m.firing_sequence_us = 55.296;
   m.scan_rate_hz = scan_rate_hz;

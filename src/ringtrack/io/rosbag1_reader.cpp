@@ -278,8 +278,9 @@ void Rosbag1Reader::read_index(std::uint32_t conn_count, std::uint32_t chunk_cou
                                std::to_string(8ull * count));
       }
       for (std::uint32_t i = 0; i < count; ++i) {
-        const auto it = connections_.find(le32(data.data() + 8 * i));
-        if (it != connections_.end()) it->second.messages += le32(data.data() + 8 * i + 4);
+        const std::uint8_t* entry = data.data() + 8 * std::size_t{i};
+        const auto it = connections_.find(le32(entry));
+        if (it != connections_.end()) it->second.messages += le32(entry + 4);
       }
     } else {
       ++stats_.unknown_records;

@@ -150,7 +150,7 @@ VelodynePacketStatus parse_velodyne_packet(std::span<const std::uint8_t> payload
   const int stride = out.dual ? 2 : 1;  // distinct firing blocks
   if (out.dual) {
     for (int b = 0; b < kVelodyneBlocks; b += 2) {
-      if (azimuth[static_cast<std::size_t>(b)] != azimuth[static_cast<std::size_t>(b + 1)]) {
+      if (azimuth[static_cast<std::size_t>(b)] != azimuth[static_cast<std::size_t>(b) + 1]) {
         return VelodynePacketStatus::kDualPairMismatch;
       }
     }
@@ -166,9 +166,9 @@ VelodynePacketStatus parse_velodyne_packet(std::span<const std::uint8_t> payload
     // (the next packet is not known yet).
     double advance = last_advance;
     if (b + stride < kVelodyneBlocks) {
-      const int diff = (azimuth[static_cast<std::size_t>(b + stride)] -
-                        azimuth[static_cast<std::size_t>(b)] + 36000) %
-                       36000;
+      const auto at = static_cast<std::size_t>(b);
+      const int diff =
+          (azimuth[at + static_cast<std::size_t>(stride)] - azimuth[at] + 36000) % 36000;
       advance = diff * 0.01;
       if (!(advance >= 0.25 * nominal_block_deg && advance <= 4.0 * nominal_block_deg)) {
         advance = nominal_block_deg;
@@ -192,7 +192,8 @@ VelodynePacketStatus parse_velodyne_packet(std::span<const std::uint8_t> payload
       seq.sequence_in_block = s;
     }
   }
-  out.packet_us = (kVelodyneBlocks / stride) * block_us;
+  const int firings = kVelodyneBlocks / stride;  // exact: 12 blocks, one or two per firing
+  out.packet_us = firings * block_us;
   return VelodynePacketStatus::kOk;
 }
 
@@ -216,10 +217,11 @@ void append_velodyne_points(const VelodyneParsedPacket& packet, const core::Sens
       for (int k = i; k < end; ++k) {
         const VelodyneSequence& seq = packet.sequences[static_cast<std::size_t>(k)];
         for (int laser = 0; laser < lasers; ++laser) {
-          const std::uint8_t* rec = seq.records[static_cast<std::size_t>(kind)] + 3 * laser;
+          const std::size_t at = 3 * static_cast<std::size_t>(laser);  // 3-byte records
+          const std::uint8_t* rec = seq.records[static_cast<std::size_t>(kind)] + at;
           const int raw = read_u16(rec);
           if (raw == 0) continue;
-          if (kind == 1 && read_u16(seq.records[0] + 3 * laser) == raw) continue;
+          if (kind == 1 && read_u16(seq.records[0] + at) == raw) continue;
           const int ring = ring_of_laser[static_cast<std::size_t>(laser)];
           const double firing_us = model.firing_offset_us[static_cast<std::size_t>(ring)];
           VelodynePoint p;

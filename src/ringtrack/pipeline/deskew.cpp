@@ -22,7 +22,7 @@ core::Pose deskew_scan(core::OrganizedScan& scan, const core::Pose& start, const
                            " ns) must be later than the start pose (" +
                            std::to_string(start.stamp_ns) + " ns)");
   }
-  const core::Pose ref = interpolate_pose(start, end, scan.stamp_ns);
+  core::Pose ref = interpolate_pose(start, end, scan.stamp_ns);  // not const, so it is moved out
   const Eigen::Isometry3d ref_from_world = ref.isometry().inverse();
   const int columns = scan.columns();
   const bool stamped = scan.column_stamp_ns.size() == static_cast<std::size_t>(columns);

@@ -166,7 +166,7 @@ core::Pose RunInput::recording_pose(std::size_t index, core::OrganizedScan& scan
     throw core::InputError("--poses: no pose around scan " + std::to_string(index) + " at stamp " +
                            std::to_string(scan.stamp_ns) + " ns");
   }
-  const core::Pose pose = trajectory_.at(scan.stamp_ns);
+  core::Pose pose = trajectory_.at(scan.stamp_ns);  // not const, so it is moved out
   const auto [first_ns, last_ns] = column_time_span(scan);
   if (!deskew_ || last_ns <= first_ns) return pose;
   if (!trajectory_.covers(first_ns) || !trajectory_.covers(last_ns)) {

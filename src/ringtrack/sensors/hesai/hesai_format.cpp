@@ -160,8 +160,8 @@ HesaiPacketStatus parse_hesai_packet(std::span<const std::uint8_t> payload,
   }
   if (out.dual) {
     for (int b = 0; b + 1 < format.blocks; b += 2) {
-      if (out.azimuth[static_cast<std::size_t>(b)] !=
-          out.azimuth[static_cast<std::size_t>(b + 1)]) {
+      const auto first = static_cast<std::size_t>(b);
+      if (out.azimuth[first] != out.azimuth[first + 1]) {
         return HesaiPacketStatus::kBadAzimuth;
       }
     }
