@@ -344,7 +344,9 @@ OrganizedCloud CloudOrganizer::organize(const UnorganizedCloud& cloud) const {
     const double range = std::sqrt(h * h + dz * dz);
     const double az = fast_atan2(y, x) + column_shift_rad_[ru];
     const double rel = wrap_two_pi(clockwise ? first - az : az - first);
-    int column = static_cast<int>(rel / step_rad_ + 0.5);
+    // The nearest column, halves up: rel is in [0, 2 pi) (at worst a hair below 0), where this
+    // is what + 0.5 and truncation gave, but for 0.49999999999999994, which that rounded up.
+    int column = static_cast<int>(std::lround(rel / step_rad_));
     if (column >= columns_) column -= columns_;
     if (timed) {
       auto& t = first_ns[static_cast<std::size_t>(column)];
