@@ -313,8 +313,13 @@ void OusterDecoder::decode_columns(std::size_t count, core::OrganizedScan::Cells
   // The pixels beam-major (beam * count + column), read in the packet's order.
   std::int32_t* range_rows = range_rows_.data();
   float* reflectivity_rows = reflectivity_rows_.data();
+  const std::size_t column_bytes = beams * stride;
   for (std::size_t j = 0; j < count; ++j) {
     const std::uint8_t* q = pixels_[j];
+    // The packet is read once, from memory: ask for the next column's lines ahead.
+    if (j + 1 < count) {
+      for (std::size_t at = 0; at < column_bytes; at += 64) __builtin_prefetch(pixels_[j + 1] + at);
+    }
     for (std::size_t b = 0; b < beams; ++b, q += stride) {
       OusterPixel px;
       read_pixel(q, kProfile, px);
