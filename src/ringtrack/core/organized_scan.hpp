@@ -65,12 +65,12 @@ class OrganizedScan {
 
   /// Writable views of the per-cell arrays (same layout as ranges() and the others).
   struct Cells {
-    float* range_m;
-    float* intensity;
-    float* x;
-    float* y;
-    float* z;
-    ReturnStatus* status;
+    float* range_m;        ///< ranges() (NaN where not valid)
+    float* intensity;      ///< intensities() (0 where not valid)
+    float* x;              ///< xs() (NaN where not valid)
+    float* y;              ///< ys()
+    float* z;              ///< zs()
+    ReturnStatus* status;  ///< statuses()
   };
   /// The per-cell arrays for a decoder's hot loop that writes cells without a call per cell.
   /// The writer keeps set_return's and set_invalid's invariants: a valid cell holds a finite
