@@ -15,7 +15,8 @@ namespace {
 
 using namespace ringtrack;
 
-void decode(benchmark::State& state, const std::string& profile, bool recycle) {
+void decode(benchmark::State& state, const std::string& profile, bool recycle,
+            bool reference = false) {
   test::OusterEncoderOptions eo;
   eo.profile = profile;
   eo.pixels_per_column = 128;
@@ -34,7 +35,9 @@ void decode(benchmark::State& state, const std::string& profile, bool recycle) {
           }));
     }
   }
-  sensors::ouster::OusterDecoder decoder(meta);
+  sensors::ouster::OusterDecoderOptions options;
+  options.reference_kernel = reference;
+  sensors::ouster::OusterDecoder decoder(meta, options);
   std::size_t scans = 0;
   for (auto _ : state) {
     for (const auto& p : packets) {
@@ -68,5 +71,12 @@ void BM_DecodeOusterOs1_128LowBandwidth(benchmark::State& state) {
   decode(state, "RNG15_RFL8_NIR8", true);
 }
 BENCHMARK(BM_DecodeOusterOs1_128LowBandwidth)->Unit(benchmark::kMillisecond);
+
+// The per-pixel reference kernel (OusterDecoderOptions::reference_kernel), the decoder's kernel
+// before issue 13's fast one, for side-by-side figures from one binary.
+void BM_DecodeOusterOs1_128Reference(benchmark::State& state) {
+  decode(state, "RNG19_RFL8_SIG16_NIR16", true, true);
+}
+BENCHMARK(BM_DecodeOusterOs1_128Reference)->Unit(benchmark::kMillisecond);
 
 }  // namespace

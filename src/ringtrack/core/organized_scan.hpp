@@ -63,6 +63,22 @@ class OrganizedScan {
   [[nodiscard]] const std::vector<float>& intensities() const { return intensity_; }
   [[nodiscard]] const std::vector<ReturnStatus>& statuses() const { return status_; }
 
+  /// Writable views of the per-cell arrays (same layout as ranges() and the others).
+  struct Cells {
+    float* range_m;        ///< ranges() (NaN where not valid)
+    float* intensity;      ///< intensities() (0 where not valid)
+    float* x;              ///< xs() (NaN where not valid)
+    float* y;              ///< ys()
+    float* z;              ///< zs()
+    ReturnStatus* status;  ///< statuses()
+  };
+  /// The per-cell arrays for a decoder's hot loop that writes cells without a call per cell.
+  /// The writer keeps set_return's and set_invalid's invariants: a valid cell holds a finite
+  /// range and point; any other cell a NaN range and point and intensity 0.
+  [[nodiscard]] Cells cells() {
+    return {range_m_.data(), intensity_.data(), x_.data(), y_.data(), z_.data(), status_.data()};
+  }
+
   /// Azimuth of each column (radians, counter-clockwise from +x).
   std::vector<double> column_azimuth_rad;
   /// Time of each column's first firing (ns, same clock as the poses).

@@ -32,6 +32,9 @@ std::string to_string(OusterReturn selection);
 struct OusterDecoderOptions {
   bool keep_partial_scans{false};  ///< emit frames with columns of the window missing
   OusterReturn return_selection{OusterReturn::kStrongest};  ///< which return fills a cell
+  /// Decode pixel by pixel through OrganizedScan::set_return and a per (measurement id, beam)
+  /// point table: the naive reference the fast kernel is tested against (docs/ouster.md).
+  bool reference_kernel{false};
 };
 
 /// Counters; every skipped packet and missing column is counted here.
@@ -91,6 +94,13 @@ class OusterDecoder {
  private:
   void start_frame(int frame_id);
   void finish_frame();
+  // The fast kernel: the packet's valid columns (ids_, pixels_, ce_, se_ hold count of them)
+  // written beam by beam, each beam's pixels a run of neighbouring cells of its ring's row.
+  template <OusterProfile kProfile>
+  void decode_columns(std::size_t count, core::OrganizedScan::Cells cells);
+  // The reference kernel: one column's pixels through set_return / set_invalid.
+  void decode_column_reference(const std::uint8_t* pixels, int measurement_id,
+                               core::OrganizedScan& scan);
 
   OusterMetadata metadata_;
   OusterDecoderOptions options_;
@@ -101,7 +111,26 @@ class OusterDecoder {
   std::array<double, 9> rotation_{};
   std::array<double, 3> translation_mm_{};
   double yaw_rad_{0};
-  std::vector<Eigen::Vector3f> lut_direction_, lut_offset_;  // per (measurement id, beam)
+  std::vector<int> shift_;  // pixel_shift_by_row brought into [0, columns)
+  // Reference kernel: the point per (measurement id, beam), p = range * direction + offset.
+  std::vector<Eigen::Vector3f> lut_direction_, lut_offset_;
+  // Fast kernel. Per beam: cell index of measurement id 0 and the id from which the destaggered
+  // column wraps around; the point's factors, p = cos(enc) * (range * u + pu) +
+  // sin(enc) * (range * v + pv) + range * w + pw (the formula of point() expanded, metres).
+  std::vector<std::size_t> cell0_;
+  std::vector<int> wrap_at_;
+  std::vector<float> ux_, uy_, uz_, vx_, vy_, vz_, wx_, wy_, wz_;
+  std::vector<float> pux_, puy_, puz_, pvx_, pvy_, pvz_, pwx_, pwy_, pwz_;
+  std::vector<float> cos_enc_f_, sin_enc_f_;  // per measurement id
+  // The packet in progress, per valid column: measurement id, first pixel, cos and sin of the
+  // encoder angle.
+  std::vector<int> ids_;
+  std::vector<const std::uint8_t*> pixels_;
+  std::vector<float> ce_, se_;
+  // Its pixels beam-major (beam * columns + column): range (mm), reflectivity.
+  std::vector<std::int32_t> range_rows_;
+  std::vector<float> reflectivity_rows_;
+  std::int32_t valid_lo_mm_{1}, valid_hi_mm_{0};  // the ranges of valid cells
 
   std::optional<core::OrganizedScan> scan_;
   std::optional<core::OrganizedScan> spare_;
