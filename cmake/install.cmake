@@ -24,7 +24,7 @@ install(EXPORT ringtrackTargets NAMESPACE ringtrack:: DESTINATION ${RINGTRACK_IN
 configure_package_config_file(${PROJECT_SOURCE_DIR}/cmake/ringtrackConfig.cmake.in
   ${PROJECT_BINARY_DIR}/ringtrackConfig.cmake INSTALL_DESTINATION ${RINGTRACK_INSTALL_CMAKEDIR})
 # SameMinorVersion, not SameMajorVersion: below 1.0 a minor release may break the API (semantic
-# versioning's 0.y rule), so find_package(ringtrack 0.1) must accept 0.1.x only, never 0.2.
+# versioning's 0.y rule), so find_package(ringtrack 0.2) must accept 0.2.x only, never 0.3.
 write_basic_package_version_file(${PROJECT_BINARY_DIR}/ringtrackConfigVersion.cmake
   COMPATIBILITY SameMinorVersion)
 install(FILES ${PROJECT_BINARY_DIR}/ringtrackConfig.cmake
