@@ -159,18 +159,14 @@ OusterDecoder::OusterDecoder(OusterMetadata metadata, OusterDecoderOptions optio
   const Eigen::Vector3d t_mm(translation_mm_[0], translation_mm_[1], translation_mm_[2]);
   const double n = metadata_.origin_to_beam_mm;
   bool bounded = true;
-  for (auto* v : {&ux_, &uy_, &uz_, &vx_, &vy_, &vz_, &wx_, &wy_, &wz_, &pux_, &puy_, &puz_, &pvx_,
-                  &pvy_, &pvz_, &pwx_, &pwy_, &pwz_}) {
-    v->resize(beams);
-  }
-  const auto put = [&](std::vector<float>& x, std::vector<float>& y, std::vector<float>& z,
-                       std::size_t b, const Eigen::Vector3d& value) {
-    x[b] = static_cast<float>(value.x());
-    y[b] = static_cast<float>(value.y());
-    z[b] = static_cast<float>(value.z());
+  factors_.resize(beams);
+  const auto put = [&](float& x, float& y, float& z, const Eigen::Vector3d& value) {
+    x = static_cast<float>(value.x());
+    y = static_cast<float>(value.y());
+    z = static_cast<float>(value.z());
     // Bounded factors keep every point finite (ranges are at most 524 m), so the kernel
     // needs no finiteness test per pixel; absurd metadata goes through the reference kernel.
-    for (const float f : {x[b], y[b], z[b]}) bounded = bounded && std::abs(f) <= 1e6f;
+    for (const float f : {x, y, z}) bounded = bounded && std::abs(f) <= 1e6f;
   };
   for (std::size_t b = 0; b < beams; ++b) {
     const double a = cos_alt_[b] * cos_beam_az_[b];
@@ -178,12 +174,13 @@ OusterDecoder::OusterDecoder(OusterMetadata metadata, OusterDecoderOptions optio
     const Eigen::Vector3d u = a * rot.col(0) + s * rot.col(1);
     const Eigen::Vector3d v = -s * rot.col(0) + a * rot.col(1);
     const Eigen::Vector3d wv = sin_alt_[b] * rot.col(2);
-    put(ux_, uy_, uz_, b, u);
-    put(vx_, vy_, vz_, b, v);
-    put(wx_, wy_, wz_, b, wv);
-    put(pux_, puy_, puz_, b, (metadata_.beam_x_mm * rot.col(0) - n * u) * 1e-3);
-    put(pvx_, pvy_, pvz_, b, (metadata_.beam_x_mm * rot.col(1) - n * v) * 1e-3);
-    put(pwx_, pwy_, pwz_, b, (metadata_.beam_z_mm * rot.col(2) + t_mm - n * wv) * 1e-3);
+    detail::OusterBeamFactors& k = factors_[b];
+    put(k.ux, k.uy, k.uz, u);
+    put(k.vx, k.vy, k.vz, v);
+    put(k.wx, k.wy, k.wz, wv);
+    put(k.pux, k.puy, k.puz, (metadata_.beam_x_mm * rot.col(0) - n * u) * 1e-3);
+    put(k.pvx, k.pvy, k.pvz, (metadata_.beam_x_mm * rot.col(1) - n * v) * 1e-3);
+    put(k.pwx, k.pwy, k.pwz, (metadata_.beam_z_mm * rot.col(2) + t_mm - n * wv) * 1e-3);
   }
   cos_enc_f_.assign(cos_enc_.begin(), cos_enc_.end());
   sin_enc_f_.assign(sin_enc_.begin(), sin_enc_.end());
@@ -260,11 +257,6 @@ void OusterDecoder::start_frame(int frame_id) {
 
 namespace {
 
-// The point of a beam as a function of the range and the encoder angle (see the constructor).
-struct BeamFactors {
-  float ux, uy, uz, vx, vy, vz, wx, wy, wz, pux, puy, puz, pvx, pvy, pvz, pwx, pwy, pwz;
-};
-
 // Keeps a float's bits where keep is all ones, else puts those of fill.
 inline float select_bits(float value, std::uint32_t keep, std::uint32_t fill) {
   return std::bit_cast<float>((std::bit_cast<std::uint32_t>(value) & keep) | fill);
@@ -276,17 +268,20 @@ inline float select_bits(float value, std::uint32_t keep, std::uint32_t fill) {
 // valid_lo_mm .. valid_hi_mm, the millimetres whose range in metres is in the model's limits.
 void write_run(std::size_t n, const std::int32_t* __restrict range_mm,
                const float* __restrict reflectivity, const float* __restrict ce,
-               const float* __restrict se, const BeamFactors& factors, std::int32_t valid_lo_mm,
-               std::int32_t valid_hi_mm, float* __restrict out_range,
+               const float* __restrict se, const detail::OusterBeamFactors& factors,
+               std::int32_t valid_lo_mm, std::int32_t valid_hi_mm, float* __restrict out_range,
                float* __restrict out_intensity, float* __restrict out_x, float* __restrict out_y,
                float* __restrict out_z, core::ReturnStatus* __restrict out_status) {
-  const BeamFactors k = factors;
+  const detail::OusterBeamFactors k = factors;
   const auto nan_bits = std::bit_cast<std::uint32_t>(kNaN);
   for (std::size_t j = 0; j < n; ++j) {
     const std::int32_t mm = range_mm[j];
     const float r = static_cast<float>(mm) * 1e-3f;  // as the reference kernel rounds it
     const bool valid = (mm >= valid_lo_mm) & (mm <= valid_hi_mm);
-    const std::int32_t status = valid ? 1 : mm == 0 ? 0 : mm < valid_lo_mm ? 2 : 3;
+    const core::ReturnStatus status = valid              ? core::ReturnStatus::kValid
+                                      : mm == 0          ? core::ReturnStatus::kNoReturn
+                                      : mm < valid_lo_mm ? core::ReturnStatus::kTooClose
+                                                         : core::ReturnStatus::kTooFar;
     const float x = (r * k.ux + k.pux) * ce[j] + (r * k.vx + k.pvx) * se[j] + (r * k.wx + k.pwx);
     const float y = (r * k.uy + k.puy) * ce[j] + (r * k.vy + k.pvy) * se[j] + (r * k.wy + k.pwy);
     const float z = (r * k.uz + k.puz) * ce[j] + (r * k.vz + k.pvz) * se[j] + (r * k.wz + k.pwz);
@@ -297,7 +292,7 @@ void write_run(std::size_t n, const std::int32_t* __restrict range_mm,
     out_x[j] = select_bits(x, keep, fill);
     out_y[j] = select_bits(y, keep, fill);
     out_z[j] = select_bits(z, keep, fill);
-    out_status[j] = static_cast<core::ReturnStatus>(status);
+    out_status[j] = status;
   }
 }
 
@@ -307,7 +302,6 @@ template <OusterProfile kProfile>
 void OusterDecoder::decode_columns(std::size_t count, core::OrganizedScan::Cells cells) {
   constexpr std::size_t kMaxColumns = 64;  // columns_per_packet is at most 64 (metadata)
   const auto beams = static_cast<std::size_t>(metadata_.pixels_per_column);
-  const int w = metadata_.columns_per_frame;
   const std::size_t stride = metadata_.pixel_bytes();
   const OusterReturn selection = options_.return_selection;
   // The pixels beam-major (beam * count + column), read in the packet's order.
@@ -340,16 +334,13 @@ void OusterDecoder::decode_columns(std::size_t count, core::OrganizedScan::Cells
       tmp_z[kMaxColumns];
   alignas(64) core::ReturnStatus tmp_s[kMaxColumns];
   for (std::size_t b = 0; b < beams; ++b) {
-    const BeamFactors k{ux_[b],  uy_[b],  uz_[b],  vx_[b],  vy_[b],  vz_[b],
-                        wx_[b],  wy_[b],  wz_[b],  pux_[b], puy_[b], puz_[b],
-                        pvx_[b], pvy_[b], pvz_[b], pwx_[b], pwy_[b], pwz_[b]};
+    const detail::OusterBeamFactors& k = factors_[b];
     const std::int32_t* range_mm = range_rows + b * count;
     const float* reflectivity = reflectivity_rows + b * count;
-    const int wrap = wrap_at_[b];  // destaggered: the beam's pixels move by its shift
-    const std::size_t cell0 = cell0_[b];
+    // Destaggered, the beam's pixels move by its shift: one run unless they wrap around.
+    const int wrap = wrap_at_[b];
     if (consecutive && (first >= wrap || first + static_cast<int>(count) <= wrap)) {
-      const std::size_t i = cell0 + static_cast<std::size_t>(first) -
-                            (first >= wrap ? static_cast<std::size_t>(w) : 0);
+      const std::size_t i = cell_of(b, first);
       write_run(count, range_mm, reflectivity, ce_.data(), se_.data(), k, valid_lo_mm_,
                 valid_hi_mm_, cells.range_m + i, cells.intensity + i, cells.x + i, cells.y + i,
                 cells.z + i, cells.status + i);
@@ -358,9 +349,7 @@ void OusterDecoder::decode_columns(std::size_t count, core::OrganizedScan::Cells
     write_run(count, range_mm, reflectivity, ce_.data(), se_.data(), k, valid_lo_mm_, valid_hi_mm_,
               tmp_r, tmp_f, tmp_x, tmp_y, tmp_z, tmp_s);
     for (std::size_t j = 0; j < count; ++j) {
-      const int m = ids_[j];
-      const std::size_t i =
-          cell0 + static_cast<std::size_t>(m) - (m >= wrap ? static_cast<std::size_t>(w) : 0);
+      const std::size_t i = cell_of(b, ids_[j]);
       cells.range_m[i] = tmp_r[j];
       cells.intensity[i] = tmp_f[j];
       cells.x[i] = tmp_x[j];
@@ -498,8 +487,7 @@ void OusterDecoder::finish_frame() {
     for (int m = 0; m < w; ++m) {
       if (seen_[static_cast<std::size_t>(m)] != 0) continue;
       for (std::size_t b = 0; b < beams; ++b) {
-        std::size_t i = cell0_[b] + static_cast<std::size_t>(m);
-        if (m >= wrap_at_[b]) i -= static_cast<std::size_t>(w);
+        const std::size_t i = cell_of(b, m);
         cells.range_m[i] = cells.x[i] = cells.y[i] = cells.z[i] = kNaN;
         cells.intensity[i] = 0.0f;
         cells.status[i] = core::ReturnStatus::kNoReturn;

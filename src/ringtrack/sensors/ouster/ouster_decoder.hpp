@@ -37,6 +37,14 @@ struct OusterDecoderOptions {
   bool reference_kernel{false};
 };
 
+namespace detail {
+/// The fast kernel's point of one beam as a function of the range r (m) and the encoder angle:
+/// p = cos(enc) (r u + pu) + sin(enc) (r v + pv) + r w + pw (OusterDecoder's constructor).
+struct OusterBeamFactors {
+  float ux, uy, uz, vx, vy, vz, wx, wy, wz, pux, puy, puz, pvx, pvy, pvz, pwx, pwy, pwz;
+};
+}  // namespace detail
+
 /// Counters; every skipped packet and missing column is counted here.
 struct OusterDecoderStats {
   std::uint64_t packets{0};
@@ -101,6 +109,11 @@ class OusterDecoder {
   // The reference kernel: one column's pixels through set_return / set_invalid.
   void decode_column_reference(const std::uint8_t* pixels, int measurement_id,
                                core::OrganizedScan& scan);
+  // Fast kernel: the scan index of beam b's pixel of measurement id m, destaggered.
+  [[nodiscard]] std::size_t cell_of(std::size_t b, int m) const {
+    return cell0_[b] + static_cast<std::size_t>(m) -
+           (m >= wrap_at_[b] ? static_cast<std::size_t>(metadata_.columns_per_frame) : 0);
+  }
 
   OusterMetadata metadata_;
   OusterDecoderOptions options_;
@@ -119,8 +132,7 @@ class OusterDecoder {
   // sin(enc) * (range * v + pv) + range * w + pw (the formula of point() expanded, metres).
   std::vector<std::size_t> cell0_;
   std::vector<int> wrap_at_;
-  std::vector<float> ux_, uy_, uz_, vx_, vy_, vz_, wx_, wy_, wz_;
-  std::vector<float> pux_, puy_, puz_, pvx_, pvy_, pvz_, pwx_, pwy_, pwz_;
+  std::vector<detail::OusterBeamFactors> factors_;
   std::vector<float> cos_enc_f_, sin_enc_f_;  // per measurement id
   // The packet in progress, per valid column: measurement id, first pixel, cos and sin of the
   // encoder angle.
