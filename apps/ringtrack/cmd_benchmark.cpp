@@ -90,6 +90,19 @@ std::string mot_cells(const eval::MotSummary& s) {
   return o.str();
 }
 
+// The header and alignment rows of a table whose rows are label | count | mot_cells | extras:
+// the count column's name and alignment ("---:" for a number, "---" for text), and the extra
+// columns with their alignments, each " name |" / " ---: |".
+std::string mot_header(const std::string& count_column, const std::string& count_alignment,
+                       const std::string& extra_columns = "",
+                       const std::string& extra_alignment = "") {
+  return "| scenario | " + count_column +
+         " | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML | IDSW | FP | FN | GT |" +
+         extra_columns + "\n| --- | " + count_alignment +
+         " | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: |" + extra_alignment +
+         "\n";
+}
+
 std::string table_row(const std::string& label, std::int64_t scans, const eval::MotSummary& s,
                       const eval::MapCounts& m) {
   std::ostringstream o;
@@ -137,10 +150,7 @@ void accuracy_section(std::ostringstream& md, const std::vector<BenchmarkCase>& 
           "are never used to tune the defaults, so their groups show how the defaults generalise."
           "\n\n";
   }
-  md << "| scenario | scans | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML | IDSW | "
-        "FP | FN | GT | map preservation | map rejection |\n";
-  md << "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: "
-        "|\n";
+  md << mot_header("scans", "---:", " map preservation | map rejection |", " ---: | ---: |");
   for (const BenchmarkCase& c : cases) {
     md << table_row(case_label(c), c.scans, c.tracking.summary, c.map);
   }
@@ -159,10 +169,7 @@ void moving_only_section(std::ostringstream& md, const BenchmarkOptions& o,
      << " m around its first position at some time. Objects that never move are don't-care: "
         "they count neither as misses nor as matches, and a hypothesis matched to one is neither "
         "a true nor a false positive (docs/evaluation.md). Objects: moving / never moving.\n\n";
-  md << "| scenario | objects | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML | IDSW "
-        "| "
-        "FP | FN | GT |\n";
-  md << "| --- | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: |\n";
+  md << mot_header("objects", "---");
   const auto moving_row = [&](const std::string& label, std::int64_t moving, std::int64_t still,
                               const eval::MotSummary& s) {
     md << "| " << label << " | " << moving << " / " << still << " | " << mot_cells(s) << " |\n";
@@ -184,9 +191,7 @@ void person_section(std::ostringstream& md, const std::vector<BenchmarkCase>& ca
         "docs/tracking.md) in all their scans, against the same ground truth as the paper mode "
         "(every person with hit points, standing or walking). Hypotheses: person-flagged ids "
         "evaluated.\n\n";
-  md << "| scenario | hypotheses | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML | "
-        "IDSW | FP | FN | GT |\n";
-  md << "| --- | ---: | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: |\n";
+  md << mot_header("hypotheses", "---:");
   for (const BenchmarkCase& c : cases) {
     if (!c.person) continue;
     md << "| " << case_label(c) << " | " << c.person->hypotheses_evaluated << " | "
