@@ -370,6 +370,12 @@ class Schema {
             "at rest, with a detection of three or more points where it was last measured, "
             "whichever costs less than at its prediction (a walker who stopped while hidden or "
             "merged with the structure beside it; its velocity restarts at zero)");
+    boolean("hold_partly_hidden", t.hold_partly_hidden,
+            "identity: a hypothesis at rest whose detection has fewer points than its last full "
+            "view, while something nearer hides a quarter or more (two at least) of that view's "
+            "remembered points, is measured where the full view put it, for up to 10 scans in a "
+            "row (a standing person behind a passer-by: the visible edge's centroid would drag "
+            "the track off the person)");
 
     auto& m = c.mapping;
     section_ = "mapping";

@@ -131,6 +131,8 @@ struct TrackingConfig {
   double relink_max_gap_s{2.0};   // ... when it was last measured at most this long before
   bool rest_pairing{true};  // a coasting hypothesis that has moved may also pair at rest where it
                             // was last measured (a walker who stopped while unmeasured)
+  bool hold_partly_hidden{true};  // a hypothesis at rest whose detection shows only part of it,
+                                  // the rest hidden behind something nearer, stays where it was
 };
 
 /// Dynamic-object filter and static map (paper III.E).

@@ -48,6 +48,7 @@ struct Hypothesis {
   int rest_scans{0};         ///< consecutive scans with reported speed zero
   int moved_scans{0};        ///< consecutive measured scans the dynamic test held in
   int hits{0};               ///< scans with an assigned detection, the creating one included
+  int held_scans{0};         ///< consecutive measured scans held at the last full view
   bool confirmed{false};     ///< had confirm_hits detections: no longer a possible one-scan blip
   bool reported{false};      ///< confirmed and recently measured (or hidden): what outputs list
   int person_scans{0};       ///< scans with a strict (person-shaped, not relaxed) detection
@@ -85,6 +86,8 @@ struct TrackerStats {
   int relaxed_unassigned{0};    ///< relaxed detections that paired with nothing (no new track)
   int relinked{0};              ///< confirmed hypotheses that took over a lost one's id
   int paired_at_rest{0};  ///< coasting hypotheses paired at rest where last measured (rest_pairing)
+  int held_partly_hidden{0};  ///< hypotheses at rest held where their full view put them
+                              ///< (hold_partly_hidden)
 };
 
 /// Tracks objects from the detections of successive scans.
@@ -136,6 +139,8 @@ class Tracker {
   [[nodiscard]] bool may_have_stopped(const Hypothesis& h) const;
   void reassociate(const std::vector<core::Detection>& detections);
   void correct(Hypothesis& h, const core::Detection& d, int index);
+  [[nodiscard]] bool shows_part_at_rest(const Hypothesis& h, const core::Detection& d) const;
+  void hold_at_full_view(Hypothesis& h, const core::Detection& d, int index);
   void coast(Hypothesis& h);
   void create(const core::Detection& d, int index);
   void delete_uncertain();
