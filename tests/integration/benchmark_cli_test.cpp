@@ -141,7 +141,8 @@ TEST_F(BenchmarkCli, ReportsHorizontalMotpAndMovingObjectsOnly) {
   for (const char* needle :
        {"| scenario | scans | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) | MT / PT / ML |",
         "## Accuracy on moving objects only", "leaves a disc of radius 1.00 m",
-        "| scenario | objects | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) |"}) {
+        "| scenario | objects | MOTA | MOTP (m) | MOTP x-y (m) | z bias (m) |",
+        "## Static map at the end of the run"}) {
     EXPECT_NE(report.find(needle), std::string::npos) << needle;
   }
   // Two tables with a row per run and per group.
@@ -150,7 +151,12 @@ TEST_F(BenchmarkCli, ReportsHorizontalMotpAndMovingObjectsOnly) {
        at = report.find("| 7 hall (moving) |", at + 1)) {
     ++rows;
   }
-  EXPECT_EQ(rows, 4u);  // accuracy, moving objects only, person mode, time per stage
+  EXPECT_EQ(rows, 5u);  // accuracy, moving objects only, person mode, final map, time per stage
+  // The final-map figures count the same points as the per-scan ones.
+  const auto& final_map = j["groups"]["overall"]["final_map"];
+  ASSERT_TRUE(final_map.is_object());
+  EXPECT_EQ(final_map["static_points"], j["groups"]["overall"]["map"]["static_points"]);
+  EXPECT_EQ(final_map["dynamic_points"], j["groups"]["overall"]["map"]["dynamic_points"]);
 }
 
 // Counts of the benchmark against the file-based tools: equal for a static sensor. A moving

@@ -3,6 +3,7 @@
 /// present them: "all static", "all moving", "overall" and the same for validation scenarios.
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,7 @@ struct Aggregate {
   eval::MotSummary person;  ///< person mode (cases run with person_figures)
   std::int64_t person_hypotheses{0};
   eval::MapCounts map;
+  std::optional<eval::MapCounts> final_map;  ///< summed when every case has it
   StageSeries times;
   std::int64_t scans{0};
   int cases{0};

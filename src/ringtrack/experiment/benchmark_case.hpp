@@ -50,6 +50,10 @@ struct BenchmarkCaseOptions {
   /// Also evaluate the same tracks in person mode (person-flagged hypotheses, standing people
   /// included) into BenchmarkCase::person.
   bool person_figures{false};
+  /// Also count the map figures against the map at the end of the run into
+  /// BenchmarkCase::final_map (a tally of every kept point by map voxel: about a tenth more time;
+  /// `ringtrack benchmark` sets it, tuning trials leave it off).
+  bool final_map{false};
   /// Called after every scan with the simulated scan (deskewed) and the pipeline's result,
   /// e.g. to write tracks.csv and objects.csv; may be empty.
   std::function<void(const sim::SimulatedScan&, const pipeline::FrameResult&)> on_scan;
@@ -68,6 +72,11 @@ struct BenchmarkCase {
   eval::TrackingEvalResult tracking;
   std::optional<eval::TrackingEvalResult> person;  ///< person mode, with person_figures
   eval::MapCounts map;
+  /// The same points counted against the map at the end of the run: a point the filter kept
+  /// whose voxel a later decision removed from the map (an object's static era older than the
+  /// log) counts as removed. Empty unless BenchmarkCaseOptions::final_map, without per-cell
+  /// labels, or with mapping.map_radius_m > 0.
+  std::optional<eval::MapCounts> final_map;
   StageSeries times;
   double simulate_s{0};  ///< wall time producing scans (simulation or expanding a recording)
   double pipeline_s{0};  ///< wall time in the pipeline (process + finish)

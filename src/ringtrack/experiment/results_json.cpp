@@ -86,6 +86,7 @@ nlohmann::ordered_json case_json(const BenchmarkCase& c) {
       {"moving_only", moving_only_json(c.tracking.moving_objects, c.tracking.still_objects,
                                        c.tracking.moving_only)},
       {"map", map_json(c.map)},
+      {"final_map", c.final_map ? map_json(*c.final_map) : nlohmann::ordered_json()},
       {"times", times_json(c.times)},
       {"simulate_s", c.simulate_s},
       {"pipeline_s", c.pipeline_s}};
@@ -102,6 +103,7 @@ nlohmann::ordered_json group_json(const Aggregate& g, bool person_figures) {
       {"metrics", metrics_json(g.mot)},
       {"moving_only", moving_only_json(g.moving_objects, g.never_moving_objects, g.moving_only)},
       {"map", map_json(g.map)},
+      {"final_map", g.final_map ? map_json(*g.final_map) : nlohmann::ordered_json()},
       {"times", times_json(g.times)}};
   if (person_figures) {
     j["person_mode"] = {{"hypotheses_evaluated", g.person_hypotheses},

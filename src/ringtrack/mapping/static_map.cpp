@@ -343,6 +343,12 @@ const MapPoint* StaticMap::voxel_at(const Eigen::Vector3f& p) const {
   return i < table_.size ? &voxel(slot_index(table_[i])).point : nullptr;
 }
 
+std::optional<std::uint64_t> StaticMap::key_of(const Eigen::Vector3f& p) const {
+  std::uint64_t key = 0;
+  if (!voxel_key(p, inverse_size_, key)) return std::nullopt;
+  return key;
+}
+
 [[gnu::always_inline]] inline void StaticMap::accumulate(MapPoint& m, const Eigen::Vector3f& p,
                                                          float intensity) {
   if (m.count >= kSettledCount) return;  // the mean is settled

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "ringtrack/core/box3.hpp"
@@ -58,6 +59,9 @@ class StaticMap {
               SettledCells& settled);
   /// The voxel p falls in, or nullptr (no such voxel, or p outside the index range).
   [[nodiscard]] const MapPoint* voxel_at(const Eigen::Vector3f& p) const;
+  /// The key of the voxel p falls in (equal for two points exactly when they share a voxel), or
+  /// nothing for a point the map would drop (non-finite, outside the index range).
+  [[nodiscard]] std::optional<std::uint64_t> key_of(const Eigen::Vector3f& p) const;
   /// Removes every voxel whose mean lies inside box; returns how many.
   std::size_t remove_inside(const core::Box3& box);
   /// Removes every voxel whose mean lies farther than radius_m horizontally (x-y) from center,

@@ -15,6 +15,7 @@
 #include "ringtrack/experiment/plan.hpp"
 #include "ringtrack/experiment/recorded_scenario.hpp"
 #include "ringtrack/experiment/results_json.hpp"
+#include "ringtrack/sim/scenario_file.hpp"
 
 namespace ringtrack::experiment {
 namespace {
@@ -104,6 +105,48 @@ TEST(BenchmarkCase, RecordedRunGivesTheLiveRunsResults) {
     const BenchmarkCase again = run_benchmark_case(recorded, config, options);
     EXPECT_EQ(metrics_json(again.tracking.summary), metrics_json(replay.tracking.summary));
   }
+}
+
+// The final-map figures (BenchmarkCase::final_map) count the same points as the per-scan ones;
+// they differ only where a decision came after a scan had left the log. People in the chat
+// circles stand for seconds before they walk off: with a log of 5 scans their static era is in
+// the map when their tracks turn dynamic, and its voxels leave the map then. With a log longer
+// than the run every decision is made while the scans are logged, so both counts agree; with a
+// map radius (voxels leave memory) there are no final-map figures.
+TEST(BenchmarkCase, FinalMapCreditsRemovalsAfterTheLog) {
+  const sim::Scenario s = [] {
+    sim::Scenario v = sim::load_scenario_file(std::string(RINGTRACK_SOURCE_DIR) +
+                                              "/config/validation/v2-chat-circles.yaml");
+    v.duration_s = 12.0;
+    return v;
+  }();
+  BenchmarkCaseOptions options;
+  options.seed = 1;
+  options.final_map = true;
+  core::Config short_log;
+  short_log.mapping.log_delay_scans = 5;
+  short_log.mapping.transient_scans = 0;  // needs a log of at least transient_scans
+  const BenchmarkCase later = run_benchmark_case(s, short_log, options);
+  ASSERT_TRUE(later.final_map.has_value());
+  const eval::MapCounts& m = later.map;
+  const eval::MapCounts& f = *later.final_map;
+  EXPECT_EQ(f.static_points, m.static_points);
+  EXPECT_EQ(f.dynamic_points, m.dynamic_points);
+  EXPECT_GT(m.dynamic_points, 0);
+  EXPECT_LE(f.static_kept, m.static_kept);
+  EXPECT_GT(f.dynamic_removed, m.dynamic_removed) << "no static era left the map later";
+
+  core::Config long_log = short_log;
+  long_log.mapping.log_delay_scans = 1000;
+  const BenchmarkCase logged = run_benchmark_case(s, long_log, options);
+  ASSERT_TRUE(logged.final_map.has_value());
+  EXPECT_EQ(map_json(*logged.final_map), map_json(logged.map));
+
+  core::Config bounded = short_log;
+  bounded.mapping.map_radius_m = 500.0;
+  EXPECT_FALSE(run_benchmark_case(s, bounded, options).final_map.has_value());
+  options.final_map = false;
+  EXPECT_FALSE(run_benchmark_case(s, short_log, options).final_map.has_value());
 }
 
 TEST(BenchmarkCase, OdometryEstimatesThePosesFromTheScansAsMeasured) {

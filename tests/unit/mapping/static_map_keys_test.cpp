@@ -193,5 +193,41 @@ TEST(StaticMapKeys, BatchInsertTellsVoxelsWithOneFingerprintApart) {
   EXPECT_EQ(map.voxel_at(b)->count, 6u);
 }
 
+// key_of() names the voxel a point falls in as the map itself does: two points share a key
+// exactly when they share a voxel (std::floor of the scaled coordinates), points the map drops
+// have none, and after inserting a point, voxel_at() of any point with its key finds that voxel.
+TEST(StaticMapKeys, KeyOfNamesTheVoxelAPointFallsIn) {
+  const std::vector<float> coords = awkward_coordinates();
+  StaticMap map(kVoxel);
+  const auto scaled_floor = [](float c) {
+    return std::floor(c * static_cast<float>(1.0 / kVoxel));
+  };
+  std::mt19937 rng(7);
+  std::uniform_int_distribution<std::size_t> pick(0, coords.size() - 1);
+  int compared = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const Eigen::Vector3f a(coords[pick(rng)], coords[pick(rng)], coords[pick(rng)]);
+    const Eigen::Vector3f b(a.x(), coords[pick(rng)], a.z());
+    const auto ka = map.key_of(a);
+    const auto kb = map.key_of(b);
+    if (!a.allFinite()) {
+      EXPECT_FALSE(ka.has_value());
+    }
+    if (!ka || !kb) continue;
+    ++compared;
+    EXPECT_EQ(*ka == *kb, scaled_floor(a.y()) == scaled_floor(b.y()))
+        << a.transpose() << " / " << b.transpose();
+  }
+  EXPECT_GT(compared, 1000);
+  const Eigen::Vector3f p(0.31f, -0.07f, 1.52f);
+  const Eigen::Vector3f same(0.39f, -0.01f, 1.58f);
+  const Eigen::Vector3f next(0.41f, -0.01f, 1.58f);
+  map.insert(p, 1.0f);
+  ASSERT_EQ(map.key_of(p), map.key_of(same));
+  ASSERT_NE(map.key_of(p), map.key_of(next));
+  EXPECT_NE(map.voxel_at(same), nullptr);
+  EXPECT_EQ(map.voxel_at(next), nullptr);
+}
+
 }  // namespace
 }  // namespace ringtrack::mapping
