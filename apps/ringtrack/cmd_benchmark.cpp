@@ -203,7 +203,6 @@ void person_section(std::ostringstream& md, const std::vector<BenchmarkCase>& ca
   }
 }
 
-// The paper's figures beside the static and moving groups, and the goal for the defaults.
 // The map figures again, counted against the map at the end of the run (BenchmarkCase::final_map),
 // beside the per-scan decisions; absent when no run has them (mapping.map_radius_m > 0).
 void final_map_section(std::ostringstream& md, const std::vector<BenchmarkCase>& cases,
@@ -231,6 +230,7 @@ void final_map_section(std::ostringstream& md, const std::vector<BenchmarkCase>&
   for (const Aggregate& g : groups) row("**" + g.label + "**", g.map, g.final_map);
 }
 
+// The paper's figures beside the static and moving groups, and the goal for the defaults.
 void paper_section(std::ostringstream& md, const std::vector<Aggregate>& groups) {
   md << "\n## Beside the paper\n\n";
   md << "The paper's figures are after leave-one-out tuning on its own Gazebo scenarios; ours use "

@@ -25,12 +25,13 @@ void Aggregate::add(const BenchmarkCase& c) {
   map += c.map;
   // A group's final-map figures sum every case's; one case without them leaves the group
   // without (a partial sum would pass for the whole group).
-  if (cases == 0)
+  if (cases == 0) {
     final_map = c.final_map;
-  else if (final_map && c.final_map)
+  } else if (final_map && c.final_map) {
     *final_map += *c.final_map;
-  else
+  } else {
     final_map.reset();
+  }
   for (const auto& [name, member] : stage_members()) {
     (times.*member)
         .insert((times.*member).end(), (c.times.*member).begin(), (c.times.*member).end());
