@@ -395,23 +395,28 @@ void Tracker::reassociate(const std::vector<core::Detection>& detections) {
   }
 }
 
-void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
-  h.filter.update(d.centroid.cast<double>(), update_r_[index]);
+void Tracker::measure(Hypothesis& h, const Eigen::Vector3d& at, const core::Detection& d,
+                      int index) {
+  h.filter.update(at, update_r_[index]);
   if (config_.vertical_motion == core::VerticalMotion::kConstantPosition) {
     h.filter.hold_vertical_velocity();
   }
   h.filter.cap_speed(max_speed_mps_);
-  h.box = d.box;
   h.missed_scans = 0;
   h.points = d.indices.size();
   h.detection = index;
-  h.last_detection = {d.centroid,       d.object_centroid(), d.covariance, d.box,
-                      d.indices.size(), d.relaxed,           stamp_ns_};
   ++h.hits;
-  h.held_scans = 0;
   h.occluded = false;
   h.unseen = false;
   h.seen_through_scans = 0;
+}
+
+void Tracker::correct(Hypothesis& h, const core::Detection& d, int index) {
+  measure(h, d.centroid.cast<double>(), d, index);
+  h.box = d.box;
+  h.last_detection = {d.centroid,       d.object_centroid(), d.covariance, d.box,
+                      d.indices.size(), d.relaxed,           stamp_ns_};
+  h.held_scans = 0;
   remember_points(h, d);
 }
 
@@ -441,21 +446,10 @@ bool Tracker::shows_part_at_rest(const Hypothesis& h, const core::Detection& d) 
 void Tracker::hold_at_full_view(Hypothesis& h, const core::Detection& d, int index) {
   // Measured where the full view put it; that view (its centroid, box, points, count) stays the
   // reference the next scan is compared with, so a longer occlusion is recognised scan by scan.
-  h.filter.update(h.last_detection.centroid.cast<double>(), update_r_[index]);
-  if (config_.vertical_motion == core::VerticalMotion::kConstantPosition) {
-    h.filter.hold_vertical_velocity();
-  }
-  h.filter.cap_speed(max_speed_mps_);
+  measure(h, h.last_detection.centroid.cast<double>(), d, index);
   h.box = h.last_detection.box;
-  h.missed_scans = 0;
-  h.points = d.indices.size();
-  h.detection = index;
   h.last_detection.stamp_ns = stamp_ns_;
-  ++h.hits;
   ++h.held_scans;
-  h.occluded = false;
-  h.unseen = false;
-  h.seen_through_scans = 0;
   ++stats_.held_partly_hidden;
 }
 

@@ -138,6 +138,9 @@ class Tracker {
   void add_rest_alternatives(const std::vector<core::Detection>& detections);
   [[nodiscard]] bool may_have_stopped(const Hypothesis& h) const;
   void reassociate(const std::vector<core::Detection>& detections);
+  // The filter update at `at` and the bookkeeping of a measured scan, shared by correct() and
+  // hold_at_full_view().
+  void measure(Hypothesis& h, const Eigen::Vector3d& at, const core::Detection& d, int index);
   void correct(Hypothesis& h, const core::Detection& d, int index);
   [[nodiscard]] bool shows_part_at_rest(const Hypothesis& h, const core::Detection& d) const;
   void hold_at_full_view(Hypothesis& h, const core::Detection& d, int index);

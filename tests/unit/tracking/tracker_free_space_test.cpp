@@ -563,6 +563,17 @@ struct PassResult {
   int held{0};  // scans the tracker held it at its full view (stats().held_partly_hidden)
 };
 
+// A scan's detections when something may hide part of the person: what is visible of the person
+// (three cells or more) first, then the occluder's cells.
+std::vector<core::Detection> person_and_occluder(const Rendered& r, int occluder) {
+  std::vector<core::Detection> dets;
+  const auto visible = cells_of(r, {kPerson});
+  if (visible.size() >= 3) dets.push_back(detection_of(r, visible));
+  const auto hiding = cells_of(r, {occluder});
+  if (!hiding.empty()) dets.push_back(detection_of(r, hiding));
+  return dets;
+}
+
 PassResult standing_person_behind_a_passer_by(bool hold) {
   core::TrackingConfig config;
   config.hold_partly_hidden = hold;
@@ -572,12 +583,7 @@ PassResult standing_person_behind_a_passer_by(bool hold) {
   PassResult out;
   const auto step = [&](const std::vector<Block>& scene, int k) {
     const auto r = render(sensor_pose(0, 0), scene, scan_stamp_ns(k));
-    std::vector<core::Detection> dets;
-    const auto visible = cells_of(r, {kPerson});
-    if (visible.size() >= 3) dets.push_back(detection_of(r, visible));
-    const auto passer = cells_of(r, {kPasser});
-    if (!passer.empty()) dets.push_back(detection_of(r, passer));
-    run.step(r, dets);
+    run.step(r, person_and_occluder(r, kPasser));
     out.held += run.tracker.stats().held_partly_hidden;
   };
   for (int k = 0; k < 30; ++k) step({wall_at(12.0), person}, k);
@@ -634,12 +640,7 @@ PassResult standing_person_behind_a_pillar_seen_walking_past(bool hold) {
     const double sensor_y = -2.25 + 0.05 * k;
     const auto r =
         render(sensor_pose(0, sensor_y), {wall_at(12.0), person, pillar}, scan_stamp_ns(k));
-    std::vector<core::Detection> dets;
-    const auto visible = cells_of(r, {kPerson});
-    if (visible.size() >= 3) dets.push_back(detection_of(r, visible));
-    const auto post = cells_of(r, {kPillar});
-    if (!post.empty()) dets.push_back(detection_of(r, post));
-    run.step(r, dets);
+    run.step(r, person_and_occluder(r, kPillar));
     out.held += run.tracker.stats().held_partly_hidden;
     if (k == 20) {
       const Hypothesis* first = run.of_first();
