@@ -366,10 +366,12 @@ class Schema {
            "identity: ... when that hypothesis was last measured at most this long before the "
            "new one's birth (s)");
     boolean("rest_pairing", t.rest_pairing,
-            "identity: a hypothesis that has moved and missed its last scan(s) may also pair, "
-            "at rest, with a detection of three or more points where it was last measured, "
-            "whichever costs less than at its prediction (a walker who stopped while hidden or "
-            "merged with the structure beside it; its velocity restarts at zero)");
+            "identity: a hypothesis that has moved and missed its last scan(s), or whose last "
+            "detection lay outside the gate behind its prediction, may also pair, at rest, with "
+            "a detection of three or more points where it was last measured, whichever costs "
+            "less than at its prediction (a walker who stopped while hidden, merged with the "
+            "structure beside it, or faster than the filter follows; its velocity restarts at "
+            "zero)");
     boolean("hold_partly_hidden", t.hold_partly_hidden,
             "identity: a hypothesis at rest whose detection has fewer points than its last full "
             "view, while something nearer hides a quarter or more (two at least) of that view's "

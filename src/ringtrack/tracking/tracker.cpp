@@ -117,6 +117,18 @@ double pair_cost_terms(const core::TrackingConfig& config, double gate, const Ga
   return kInf;
 }
 
+// Whether a detection lies behind the hypothesis' prediction along its motion, more along it
+// than across it: the object slowed down or stopped, rather than something beside its path.
+bool falls_behind(const Hypothesis& h, const core::Detection& d) {
+  const Eigen::Vector2d v = h.filter.velocity().head<2>();
+  const double speed = v.norm();
+  if (speed == 0.0) return false;
+  const Eigen::Vector2d e = d.centroid.cast<double>().head<2>() - h.position().head<2>();
+  const double along = e.dot(v) / speed;
+  const double across = std::abs(e.x() * v.y() - e.y() * v.x()) / speed;
+  return along < 0.0 && across < -along;
+}
+
 // Removes the hypotheses whose flag is set, keeping the others' order (creation order, which
 // the merge relies on); returns how many went.
 int remove_flagged(std::vector<Hypothesis>& hypotheses, const std::vector<char>& flagged) {
@@ -243,6 +255,7 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
   reassociate(detections);
   for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
     const int d = col_of_row_[i];
+    hypotheses_[i].fell_behind = fell_behind_[i] != 0;
     if (d == kUnassigned) {
       coast(hypotheses_[i]);
       look_for_missed(hypotheses_[i]);
@@ -332,8 +345,8 @@ void Tracker::assign(const std::vector<core::Detection>& detections) {
 }
 
 bool Tracker::may_have_stopped(const Hypothesis& h) const {
-  return config_.rest_pairing && h.ever_dynamic && h.missed_scans > 0 && h.hits > 0 &&
-         !h.filter.velocity().head<2>().isZero();
+  return config_.rest_pairing && h.ever_dynamic && (h.missed_scans > 0 || h.fell_behind) &&
+         h.hits > 0 && !h.filter.velocity().head<2>().isZero();
 }
 
 void Tracker::add_rest_alternatives(const std::vector<core::Detection>& detections) {
@@ -342,7 +355,8 @@ void Tracker::add_rest_alternatives(const std::vector<core::Detection>& detectio
   // speed, and a static hypothesis on the structure beside the walker took its detection (an
   // identity switch, and a track that never turned dynamic again; the hall, docs/BENCHMARK.md).
   // So a coasting hypothesis that has moved may also pair at rest where it was last measured,
-  // whichever costs less; update() then restarts its filter there.
+  // whichever costs less; update() then restarts its filter there. So may one whose last
+  // detection fell behind its prediction, outside the gate: a walker slowing to a stop in view.
   rest_cheaper_.clear();
   const std::size_t cols = detections.size();
   const double g = gate();
@@ -373,6 +387,7 @@ void Tracker::reassociate(const std::vector<core::Detection>& detections) {
   // means coincide, and the detection started a new track beside the old one (an identity
   // switch). A second, greedy pass pairs what the gate left over by horizontal distance.
   // Extends col_of_row_ and detection_used_ (the gated assignment's pairs, marked by update()).
+  fell_behind_.assign(hypotheses_.size(), 0);
   if (config_.reassociate_distance_m <= 0.0 || detections.empty()) return;
   leftover_pairs_.clear();
   for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
@@ -392,6 +407,11 @@ void Tracker::reassociate(const std::vector<core::Detection>& detections) {
     if (col_of_row_[p.row] != kUnassigned || detection_used_[p.col]) continue;
     col_of_row_[p.row] = static_cast<int>(p.col);
     detection_used_[p.col] = 1;
+    // A walker slowing to a stop: the constant-velocity prediction runs ahead of it, out of the
+    // gate, scan after scan, and a nearby young hypothesis within the gate took its detection
+    // (an identity switch; docs/tracking.md, "Stopping in view"). Next scan it may also pair at
+    // rest.
+    fell_behind_[p.row] = falls_behind(hypotheses_[p.row], detections[p.col]) ? 1 : 0;
   }
 }
 

@@ -49,6 +49,8 @@ struct Hypothesis {
   int moved_scans{0};        ///< consecutive measured scans the dynamic test held in
   int hits{0};               ///< scans with an assigned detection, the creating one included
   int held_scans{0};         ///< consecutive measured scans held at the last full view
+  bool fell_behind{false};   ///< last scan's detection lay outside the gate behind the
+                             ///< prediction (paired by distance alone): it may be stopping
   bool confirmed{false};     ///< had confirm_hits detections: no longer a possible one-scan blip
   bool reported{false};      ///< confirmed and recently measured (or hidden): what outputs list
   int person_scans{0};       ///< scans with a strict (person-shaped, not relaxed) detection
@@ -187,6 +189,7 @@ class Tracker {
   std::vector<char> rest_cheaper_;    // hypotheses x detections: pairing at rest cost less; empty
                                       // when no hypothesis may have stopped
   std::vector<char> paired_at_rest_;  // per hypothesis: paired at rest where last measured
+  std::vector<char> fell_behind_;     // per hypothesis: paired by distance, behind its prediction
   std::vector<char> detection_used_;  // per detection: paired with a hypothesis this update
   struct LeftoverPair {               // reassociate(): a candidate pair and its distance
     double distance;
