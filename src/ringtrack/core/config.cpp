@@ -521,6 +521,10 @@ class Schema {
     number("source_voxel_m", o.source_voxel_m, 0.01, 20.0,
            "registration uses at most one scan point per cube of this edge (m): fewer points, "
            "faster ICP");
+    integer("min_source_points", o.min_source_points, 0, 1000000,
+            "a scan that leaves fewer registration points than this in the source grid (a "
+            "small room or hall: 50-80 at 2 m, against 560-1650 outdoors) is sampled again "
+            "with half the edge, down to map_spacing_m; 0 = never");
     number("map_radius_m", o.map_radius_m, 1.0, 10000.0,
            "map voxels farther than this from the sensor are dropped (m): bounded memory");
     number("min_range_m", o.min_range_m, 0.0, 1000.0,

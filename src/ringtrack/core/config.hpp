@@ -227,14 +227,15 @@ enum class OdometryResidual {
 /// pose source is given. Scan-to-local-map point-to-point ICP with a robust kernel, constant-
 /// velocity prediction and per-column motion compensation.
 struct OdometryConfig {
-  double voxel_size_m{1.0};         // local-map voxel edge; the nearest-neighbour search spans
-                                    // one voxel, so this bounds the correspondence distance
-  int max_points_per_voxel{20};     // points kept per map voxel (bounded memory and search)
-  double map_spacing_m{0.5};        // scan points enter the map at most one per cube this size
-  double source_voxel_m{2.0};       // registration uses at most one scan point per cube this size
-  double map_radius_m{100.0};       // map voxels farther than this from the sensor are dropped
-  double min_range_m{1.0};          // nearer returns (the platform, the operator) are not used
-  double max_range_m{100.0};        // farther returns are not used
+  double voxel_size_m{1.0};      // local-map voxel edge; the nearest-neighbour search spans
+                                 // one voxel, so this bounds the correspondence distance
+  int max_points_per_voxel{20};  // points kept per map voxel (bounded memory and search)
+  double map_spacing_m{0.5};     // scan points enter the map at most one per cube this size
+  double source_voxel_m{2.0};    // registration uses at most one scan point per cube this size
+  int min_source_points{200};    // fewer in the source grid: its edge halves, down to map_spacing_m
+  double map_radius_m{100.0};    // map voxels farther than this from the sensor are dropped
+  double min_range_m{1.0};       // nearer returns (the platform, the operator) are not used
+  double max_range_m{100.0};     // farther returns are not used
   double initial_threshold_m{2.0};  // correspondence distance before motion statistics exist
   double min_motion_m{0.1};         // prediction errors below this do not enter the statistics
   double min_threshold_m{0.3};      // floor of the adaptive correspondence distance

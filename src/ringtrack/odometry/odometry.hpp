@@ -93,6 +93,8 @@ class Odometry {
   /// spacing), leaving out points in the excluded boxes seen from the predicted pose.
   void select_points(const core::OrganizedScan& scan, const Eigen::Isometry3d& predicted,
                      std::span<const core::Box3> excluded, OdometryResult& result);
+  /// Samples the source points again from the frame points, one per cube of edge voxel_m.
+  void resample_source(double voxel_m);
   /// Pose predicted for a scan dt_s after the last one (constant velocity).
   [[nodiscard]] Eigen::Isometry3d predict(double dt_s) const;
   /// Correspondence distance from the statistics of past prediction errors.
@@ -132,8 +134,9 @@ class Odometry {
   std::vector<float> column_time_s_;  // per column: its time after the scan stamp
   VoxelKeySet frame_keys_, source_keys_;
   std::vector<Eigen::Vector3f> frame_, source_;
-  std::vector<float> frame_time_s_;   // per frame point: its column's time after the scan stamp
-  std::vector<float> source_time_s_;  // the same per source point
+  std::vector<float> frame_time_s_;  // per frame point: its column's time after the scan stamp
+  std::vector<std::uint32_t> frame_cells_;  // per frame point: its scan cell
+  std::vector<float> source_time_s_;        // the same per source point
   // The last scan's points (sensor frame), held back until the next pose is known.
   std::vector<Eigen::Vector3f> pending_;
   std::vector<float> pending_time_s_;
