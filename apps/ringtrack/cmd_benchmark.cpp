@@ -103,11 +103,15 @@ std::string mot_header(const std::string& count_column, const std::string& count
          "\n";
 }
 
+// The two map columns of a row: preservation and rejection, four decimals.
+std::string map_cells(const eval::MapCounts& m) {
+  return fixed(m.preservation_rate(), 4) + " | " + fixed(m.rejection_rate(), 4);
+}
+
 std::string table_row(const std::string& label, std::int64_t scans, const eval::MotSummary& s,
                       const eval::MapCounts& m) {
   std::ostringstream o;
-  o << "| " << label << " | " << scans << " | " << mot_cells(s) << " | "
-    << fixed(m.preservation_rate(), 4) << " | " << fixed(m.rejection_rate(), 4) << " |\n";
+  o << "| " << label << " | " << scans << " | " << mot_cells(s) << " | " << map_cells(m) << " |\n";
   return o.str();
 }
 
@@ -221,10 +225,8 @@ void final_map_section(std::ostringstream& md, const std::vector<BenchmarkCase>&
         "rejection |\n| --- | ---: | ---: | ---: | ---: |\n";
   const auto row = [&](const std::string& label, const eval::MapCounts& m,
                        const std::optional<eval::MapCounts>& f) {
-    md << "| " << label << " | " << fixed(m.preservation_rate(), 4) << " | "
-       << fixed(m.rejection_rate(), 4) << " | "
-       << (f ? fixed(f->preservation_rate(), 4) : std::string("-")) << " | "
-       << (f ? fixed(f->rejection_rate(), 4) : std::string("-")) << " |\n";
+    md << "| " << label << " | " << map_cells(m) << " | "
+       << (f ? map_cells(*f) : std::string("- | -")) << " |\n";
   };
   for (const BenchmarkCase& c : cases) row(case_label(c), c.map, c.final_map);
   for (const Aggregate& g : groups) row("**" + g.label + "**", g.map, g.final_map);
