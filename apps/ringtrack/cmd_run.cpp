@@ -77,8 +77,8 @@ runner::RunInputOptions run_input_options(const RunOptions& o) {
 void print_odometry_summary(const runner::RunSummary& s) {
   std::printf(
       "odometry         %zu of %zu scans flagged unreliable (too little geometry or not "
-      "registered); ms per scan median %.3f, p95 %.3f\n",
-      s.odometry_degenerate, s.odometry_scans, eval::quantile(s.odometry_ms, 0.5),
+      "registered), %zu weak (may slide); ms per scan median %.3f, p95 %.3f\n",
+      s.odometry_degenerate, s.odometry_scans, s.odometry_weak, eval::quantile(s.odometry_ms, 0.5),
       eval::quantile(s.odometry_ms, 0.95));
   if (s.odometry_degenerate > 0) {
     std::fprintf(stderr,
@@ -86,6 +86,14 @@ void print_odometry_summary(const runner::RunSummary& s) {
                  "the pose (e.g. ground only): the estimated poses are unreliable there "
                  "(odometry.csv, column degenerate)\n",
                  s.odometry_degenerate, s.odometry_scans);
+  }
+  if (s.odometry_weak > 0) {
+    std::fprintf(stderr,
+                 "ringtrack: warning: odometry: %zu of %zu scans had weak geometry in one "
+                 "direction (weakest_share below odometry.weak_share_threshold): the estimated "
+                 "poses may slide along it there; check them against another source "
+                 "(odometry.csv, column weak)\n",
+                 s.odometry_weak, s.odometry_scans);
   }
 }
 

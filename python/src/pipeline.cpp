@@ -209,6 +209,7 @@ void bind_pipeline(py::module_& m) {
             d["first"] = r.first;
             d["registered"] = r.registered;
             d["degenerate"] = r.degenerate;
+            d["weak"] = r.weak;
             d["weakest_share"] = r.weakest_share;
             d["iterations"] = r.iterations;
             d["source_points"] = r.source_points;

@@ -51,6 +51,7 @@ py::dict summary_dict(const runner::RunSummary& s, const runner::RunInput& input
   d["total_ms"] = s.total_ms;
   d["stopped"] = s.stopped;
   d["odometry_degenerate"] = s.odometry_degenerate;
+  d["odometry_weak"] = s.odometry_weak;
   d["poses"] = input.pose_summary(odometry_mode);
   d["deskew"] = input.deskew_summary();
   d["input"] = input.summary();

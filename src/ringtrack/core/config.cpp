@@ -563,6 +563,11 @@ class Schema {
     number("degeneracy_threshold", o.degeneracy_threshold, 0.0, 1.0,
            "a scan is flagged unreliable when the weakest translation direction holds less than "
            "this share of the squared surface normals (ground only: about 0)");
+    number("weak_share_threshold", o.weak_share_threshold, 0.0, 1.0,
+           "a registered scan whose weakest share is below this is flagged weak (odometry.csv, "
+           "the run summary): its pose may slide along that direction, as on a courtyard whose "
+           "long walls leave the other axis to a few trunks; the estimate is kept as it is. The "
+           "built-in structured scenes stay above 0.11; 0 = never");
   }
 
   std::string section_;

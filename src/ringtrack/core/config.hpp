@@ -249,6 +249,7 @@ struct OdometryConfig {
                                       // a scan's own revolution (0: constant velocity)
   bool exclude_tracks{true};          // points of tracked objects stay out of ICP and the map
   double exclude_margin_m{0.3};       // ... inside their predicted boxes grown by this
+  double weak_share_threshold{0.05};  // registered scans below it are flagged weak (may slide)
   double degeneracy_threshold{0.01};  // a scan whose weakest translation direction gets less than
                                       // this share of the surface normals is flagged unreliable
 };

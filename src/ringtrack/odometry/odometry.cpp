@@ -584,6 +584,11 @@ OdometryResult Odometry::process(core::OrganizedScan& scan, std::span<const core
   }
   result.weakest_share = weakest_translation_share(valid_normals_);
   result.degenerate = !result.registered || result.weakest_share < config_.degeneracy_threshold;
+  // Between the two thresholds the scan registers and its estimate stays as it is (a velocity
+  // reset there broke a car park that registered well: ATE 0.06 -> 17 m), but the geometry that
+  // holds one direction is thin, and where it was, unseen scenes slid by tens of metres along
+  // it unflagged (docs/odometry.md, "Weak geometry").
+  result.weak = !result.degenerate && result.weakest_share < config_.weak_share_threshold;
   const bool refine = result.registered && config_.deskew && scans_ > 0;
   if (refine) {
     refine_passes(scan, dt_s, converged, result, estimate);

@@ -17,10 +17,12 @@ namespace ringtrack::odometry {
 
 /// What the odometry made of one scan.
 struct OdometryResult {
-  core::Pose pose;            ///< world_T_sensor at scan.stamp_ns (world: see Odometry's start)
-  bool first{false};          ///< the first scan: it defines the world frame and starts the map
-  bool registered{false};     ///< ICP ran on enough correspondences (else pose = prediction)
-  bool degenerate{false};     ///< unreliable: too little geometry, or not registered
+  core::Pose pose;         ///< world_T_sensor at scan.stamp_ns (world: see Odometry's start)
+  bool first{false};       ///< the first scan: it defines the world frame and starts the map
+  bool registered{false};  ///< ICP ran on enough correspondences (else pose = prediction)
+  bool degenerate{false};  ///< unreliable: too little geometry, or not registered
+  bool weak{false};  ///< not degenerate, but weakest_share < odometry.weak_share_threshold: the
+                     ///< pose may slide along the weakest direction (docs/odometry.md)
   double weakest_share{0.0};  ///< odometry.degeneracy_threshold compares with this
   int iterations{0};
   std::size_t source_points{0};    ///< scan points registered (after downsampling)

@@ -40,32 +40,34 @@ class OdometryLog {
  public:
   explicit OdometryLog(const fs::path& path) : file_(path) {
     file_.write(
-        "scan,stamp,x,y,z,qx,qy,qz,qw,registered,degenerate,weakest_share,iterations,"
+        "scan,stamp,x,y,z,qx,qy,qz,qw,registered,degenerate,weak,weakest_share,iterations,"
         "source_points,correspondences,excluded_points,threshold_m,odometry_ms\n");
   }
   void write(std::size_t index, const odometry::OdometryResult& r, double ms) {
     char line[512];
     const auto& t = r.pose.translation;
     const auto& q = r.pose.rotation;
-    std::snprintf(line, sizeof line,
-                  "%zu,%s,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%d,%d,%.5f,%d,%zu,%zu,%zu,%.4f,%.4f\n",
-                  index, io::format_stamp(r.pose.stamp_ns).c_str(), t.x(), t.y(), t.z(), q.x(),
-                  q.y(), q.z(), q.w(), r.registered ? 1 : 0, r.degenerate ? 1 : 0, r.weakest_share,
-                  r.iterations, r.source_points, r.correspondences, r.excluded_points,
-                  r.threshold_m, ms);
+    std::snprintf(
+        line, sizeof line,
+        "%zu,%s,%.6f,%.6f,%.6f,%.9f,%.9f,%.9f,%.9f,%d,%d,%d,%.5f,%d,%zu,%zu,%zu,%.4f,%.4f\n", index,
+        io::format_stamp(r.pose.stamp_ns).c_str(), t.x(), t.y(), t.z(), q.x(), q.y(), q.z(), q.w(),
+        r.registered ? 1 : 0, r.degenerate ? 1 : 0, r.weak ? 1 : 0, r.weakest_share, r.iterations,
+        r.source_points, r.correspondences, r.excluded_points, r.threshold_m, ms);
     file_.write(std::string_view(line));
     ++scans_;
     if (r.degenerate) ++degenerate_;
+    if (r.weak) ++weak_;
     times_ms_.push_back(ms);
   }
   void close() { file_.close(); }
   [[nodiscard]] std::size_t scans() const { return scans_; }
   [[nodiscard]] std::size_t degenerate() const { return degenerate_; }
+  [[nodiscard]] std::size_t weak() const { return weak_; }
   [[nodiscard]] const std::vector<double>& times_ms() const { return times_ms_; }
 
  private:
   io::OutputFile file_;
-  std::size_t scans_{0}, degenerate_{0};
+  std::size_t scans_{0}, degenerate_{0}, weak_{0};
   std::vector<double> times_ms_;
 };
 
@@ -396,6 +398,7 @@ RunSummary Run::finish() {
   if (s.odometry_log) {
     summary.odometry_scans = s.odometry_log->scans();
     summary.odometry_degenerate = s.odometry_log->degenerate();
+    summary.odometry_weak = s.odometry_log->weak();
     summary.odometry_ms = s.odometry_log->times_ms();
   }
   if (s.mcap) summary.mcap = s.mcap->mcap_stats();

@@ -70,6 +70,7 @@ struct RunSummary {
   std::size_t dropped_points{0};            ///< outside the static map's voxel index
   std::size_t odometry_scans{0};            ///< scans the odometry registered (odometry.csv rows)
   std::size_t odometry_degenerate{0};       ///< of which flagged unreliable
+  std::size_t odometry_weak{0};             ///< of which flagged weak (may slide)
   std::vector<double> odometry_ms;          ///< the odometry's time per scan
   std::optional<io::McapWriterStats> mcap;  ///< when an MCAP file was written
   bool stopped{false};                      ///< RunOptions::stop ended the run early
