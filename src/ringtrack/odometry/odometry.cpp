@@ -286,9 +286,6 @@ void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isome
   frame_.clear();
   frame_time_s_.clear();
   frame_cells_.clear();
-  source_.clear();
-  source_time_s_.clear();
-  source_cells_.clear();
   const int columns = scan.columns();
   column_time_s_.assign(static_cast<std::size_t>(columns), 0.0F);
   if (scan.column_stamp_ns.size() == static_cast<std::size_t>(columns)) {
@@ -298,9 +295,7 @@ void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isome
     }
   }
   frame_keys_.clear(scan.size() / 4);
-  source_keys_.clear(scan.size() / 16);
   const auto inv_frame = static_cast<float>(1.0 / config_.map_spacing_m);
-  const auto inv_source = static_cast<float>(1.0 / config_.source_voxel_m);
   const Eigen::Isometry3f to_world = predicted.cast<float>();
   const auto& ranges = scan.ranges();
   for (int r = 0; r < scan.rings(); ++r) {
@@ -313,8 +308,6 @@ void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isome
       const float range = ranges[i];
       if (range < config_.min_range_m || range > config_.max_range_m) continue;
       const Eigen::Vector3f p = compensation_.point(i);
-      // The source grid is coarser: a point new to it is new to the finer frame grid too when
-      // the edges divide (the defaults), and nearly always otherwise.
       const VoxelKey key = voxel_key(p, inv_frame);
       if (key == last_key) continue;
       last_key = key;
@@ -326,31 +319,29 @@ void Odometry::select_points(const core::OrganizedScan& scan, const Eigen::Isome
       frame_.push_back(p);
       frame_time_s_.push_back(column_time_s_[static_cast<std::size_t>(c)]);
       frame_cells_.push_back(static_cast<std::uint32_t>(i));
-      if (source_keys_.insert(voxel_key(p, inv_source))) {
-        source_.push_back(p);
-        source_time_s_.push_back(frame_time_s_.back());
-        source_cells_.push_back(static_cast<std::uint32_t>(i));
-      }
     }
   }
+  // The source grid is coarser: a point new to it is new to the finer frame grid too when the
+  // edges divide (the defaults), and nearly always otherwise, so it samples the frame points.
   // A hall or a small room leaves a few dozen points in a grid made for outdoor ranges, and
   // registration on them wobbled: on the moving hall 75 points a scan, 0.33 degrees of tilt and
   // 0.2 of yaw error on average, tracks of people lost (docs/odometry.md, "Small scenes"). Outdoors
   // the grid holds hundreds to thousands.
-  for (double voxel = config_.source_voxel_m;
-       source_.size() < static_cast<std::size_t>(config_.min_source_points) &&
-       voxel > config_.map_spacing_m;) {
+  double voxel = config_.source_voxel_m;
+  sample_source(voxel);
+  while (source_.size() < static_cast<std::size_t>(config_.min_source_points) &&
+         voxel > config_.map_spacing_m) {
     voxel = std::max(0.5 * voxel, config_.map_spacing_m);
-    resample_source(voxel);
+    sample_source(voxel);
   }
   result.source_points = source_.size();
 }
 
-void Odometry::resample_source(double voxel_m) {
+void Odometry::sample_source(double voxel_m) {
   source_.clear();
   source_time_s_.clear();
   source_cells_.clear();
-  source_keys_.clear(frame_.size());
+  source_keys_.clear(frame_.size() / 4);
   const auto inv_source = static_cast<float>(1.0 / voxel_m);
   for (std::size_t k = 0; k < frame_.size(); ++k) {
     if (!source_keys_.insert(voxel_key(frame_[k], inv_source))) continue;

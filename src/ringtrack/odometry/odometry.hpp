@@ -95,8 +95,8 @@ class Odometry {
   /// spacing), leaving out points in the excluded boxes seen from the predicted pose.
   void select_points(const core::OrganizedScan& scan, const Eigen::Isometry3d& predicted,
                      std::span<const core::Box3> excluded, OdometryResult& result);
-  /// Samples the source points again from the frame points, one per cube of edge voxel_m.
-  void resample_source(double voxel_m);
+  /// Samples the source points from the frame points, one per cube of edge voxel_m.
+  void sample_source(double voxel_m);
   /// Pose predicted for a scan dt_s after the last one (constant velocity).
   [[nodiscard]] Eigen::Isometry3d predict(double dt_s) const;
   /// Correspondence distance from the statistics of past prediction errors.

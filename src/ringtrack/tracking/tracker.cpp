@@ -255,7 +255,6 @@ const std::vector<Hypothesis>& Tracker::update(const std::vector<core::Detection
   reassociate(detections);
   for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
     const int d = col_of_row_[i];
-    hypotheses_[i].fell_behind = fell_behind_[i] != 0;
     if (d == kUnassigned) {
       coast(hypotheses_[i]);
       look_for_missed(hypotheses_[i]);
@@ -387,7 +386,7 @@ void Tracker::reassociate(const std::vector<core::Detection>& detections) {
   // means coincide, and the detection started a new track beside the old one (an identity
   // switch). A second, greedy pass pairs what the gate left over by horizontal distance.
   // Extends col_of_row_ and detection_used_ (the gated assignment's pairs, marked by update()).
-  fell_behind_.assign(hypotheses_.size(), 0);
+  for (Hypothesis& h : hypotheses_) h.fell_behind = false;  // assign() has read last scan's
   if (config_.reassociate_distance_m <= 0.0 || detections.empty()) return;
   leftover_pairs_.clear();
   for (std::size_t i = 0; i < hypotheses_.size(); ++i) {
@@ -411,7 +410,7 @@ void Tracker::reassociate(const std::vector<core::Detection>& detections) {
     // gate, scan after scan, and a nearby young hypothesis within the gate took its detection
     // (an identity switch; docs/tracking.md, "Stopping in view"). Next scan it may also pair at
     // rest.
-    fell_behind_[p.row] = falls_behind(hypotheses_[p.row], detections[p.col]) ? 1 : 0;
+    hypotheses_[p.row].fell_behind = falls_behind(hypotheses_[p.row], detections[p.col]);
   }
 }
 

@@ -189,7 +189,6 @@ class Tracker {
   std::vector<char> rest_cheaper_;    // hypotheses x detections: pairing at rest cost less; empty
                                       // when no hypothesis may have stopped
   std::vector<char> paired_at_rest_;  // per hypothesis: paired at rest where last measured
-  std::vector<char> fell_behind_;     // per hypothesis: paired by distance, behind its prediction
   std::vector<char> detection_used_;  // per detection: paired with a hypothesis this update
   struct LeftoverPair {               // reassociate(): a candidate pair and its distance
     double distance;

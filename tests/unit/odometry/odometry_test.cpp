@@ -615,13 +615,14 @@ sim::Scenario courtyard(int trunks) {
   return s;
 }
 
-odometry::OdometryResult register_in(const sim::Scenario& scene) {
+odometry::OdometryResult register_in(const sim::Scenario& scene,
+                                     const core::OdometryConfig& config = test_config()) {
   sim::Scenario moved = scene;
   moved.sensor.keyframes = {{0.0, {0.5, 0.2, 2.5}, {0, 0, 2}}};
   auto a = sim::Simulator(scene, 1).next();
   auto b = sim::Simulator(moved, 1).next();
   b.scan.stamp_ns = a.scan.stamp_ns + 100'000'000;
-  odometry::Odometry odo(test_config());
+  odometry::Odometry odo(config);
   odo.process(a.scan);
   return odo.process(b.scan);
 }
@@ -639,14 +640,7 @@ TEST(Odometry, ACourtyardWithFewTrunksIsFlaggedWeakAStructuredSceneIsNot) {
   EXPECT_TRUE(trunks.weak) << trunks.weakest_share;
   core::OdometryConfig off = test_config();
   off.weak_share_threshold = 0.0;
-  sim::Scenario moved = courtyard(4);
-  moved.sensor.keyframes = {{0.0, {0.5, 0.2, 2.5}, {0, 0, 2}}};
-  auto a = sim::Simulator(courtyard(4), 1).next();
-  auto b = sim::Simulator(moved, 1).next();
-  b.scan.stamp_ns = a.scan.stamp_ns + 100'000'000;
-  odometry::Odometry odo(off);
-  odo.process(a.scan);
-  const auto unflagged = odo.process(b.scan);
+  const auto unflagged = register_in(courtyard(4), off);
   EXPECT_FALSE(unflagged.weak) << "0 turns the flag off";
   EXPECT_EQ(unflagged.pose.translation, trunks.pose.translation) << "the flag changes no pose";
 
